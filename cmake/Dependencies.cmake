@@ -1,0 +1,33 @@
+# Every third-party dependency, found once. Versions are Debian 12's; see
+# ../shared/notes/platform-debian12.md for why some come through pkg-config.
+find_package(PkgConfig REQUIRED)
+find_package(Threads REQUIRED)
+
+find_package(OpenEXR 3 CONFIG REQUIRED)
+find_package(Imath CONFIG REQUIRED)
+find_package(PNG REQUIRED)
+find_package(nlohmann_json 3 CONFIG REQUIRED)
+find_package(fmt CONFIG REQUIRED)
+find_package(spdlog CONFIG REQUIRED)
+find_package(CLI11 CONFIG REQUIRED)
+find_package(hwy CONFIG REQUIRED)
+
+# Debian's OpenColorIOConfig.cmake computes a broken prefix: use pkg-config.
+pkg_check_modules(OCIO REQUIRED IMPORTED_TARGET OpenColorIO)
+
+# GL stack: EGL through glvnd, OSMesa as a fallback. GL entry points are loaded
+# through each context's own get-proc-address, so no libGL/libOpenGL link is needed.
+pkg_check_modules(EGL REQUIRED IMPORTED_TARGET egl)
+pkg_check_modules(OSMESA REQUIRED IMPORTED_TARGET osmesa)
+pkg_check_modules(LIBDRM REQUIRED IMPORTED_TARGET libdrm)
+find_package(TinyGLTF CONFIG REQUIRED)
+
+pkg_check_modules(MHD REQUIRED IMPORTED_TARGET libmicrohttpd)
+find_package(tomlplusplus CONFIG REQUIRED)
+
+if(HDRD_BUILD_TESTS)
+  find_package(GTest CONFIG REQUIRED)
+endif()
+if(HDRD_BUILD_BENCH)
+  find_package(benchmark CONFIG REQUIRED)
+endif()

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# The main job: install what is missing, build, and produce frames for every display
+# mode into ./out (a fixture EXR through the encoder; the built-in scene once rendered).
+set -euo pipefail
+cd "$(dirname "$0")"
+bash scripts/build.sh
+exec bash scripts/main-job.sh "$@"

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages hdrd builds, tests and runs with; only what is missing.
+# Safe to run repeatedly. Needs root (or sudo) only when something is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git curl python3
+  libopenexr-dev libimath-dev libopencolorio-dev opencolorio-tools
+  libpng-dev zlib1g-dev
+  libegl-dev libgles-dev libgl-dev libosmesa6-dev libgl1-mesa-dri libegl-mesa0
+  libdrm-dev
+  nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libtinygltf-dev libstb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libmicrohttpd-dev libtomlplusplus-dev libhwy-dev
+  clang-14 libclang-rt-14-dev
+  edid-decode
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
