@@ -1,0 +1,61 @@
+// An encoded frame: the DRM-format buffer a display scans out, the PNG samples,
+// and the metadata that says exactly what is in it (REFERENCE.md §1.7, §6).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "encode/display_target.hpp"
+#include "encode/image.hpp"
+
+namespace hdrd {
+
+// CTA-861.3 content light level, in cd/m2 (rounded up to 1 cd/m2 when serialised).
+struct ContentLightLevel {
+  double max_cll_nits = 0;   // largest max(R,G,B) of any pixel, display-referred container signal
+  double max_fall_nits = 0;  // largest frame average of per-pixel max(R,G,B)
+};
+
+// DRM fourcc codes (drm_fourcc.h), repeated here so encode/ needs no libdrm.
+inline constexpr std::uint32_t fourcc(char a, char b, char c, char d) {
+  return std::uint32_t(a) | (std::uint32_t(b) << 8) | (std::uint32_t(c) << 16) | (std::uint32_t(d) << 24);
+}
+inline constexpr std::uint32_t kDrmFormatXbgr2101010 = fourcc('X', 'B', '3', '0');
+inline constexpr std::uint32_t kDrmFormatAbgr16161616f = fourcc('A', 'B', '4', 'H');
+inline constexpr std::uint32_t kDrmFormatXrgb8888 = fourcc('X', 'R', '2', '4');
+std::string fourcc_name(std::uint32_t code);  // "XB30", ...
+
+struct EncodedFrame {
+  DisplayTarget target;
+  int width = 0;
+  int height = 0;
+
+  // The scan-out buffer, little-endian as the DRM format defines it:
+  //  hdr10, hlg, 10-bit SDR: XBGR2101010 (R in bits 0-9, G 10-19, B 20-29)
+  //  scrgb: ABGR16161616F (R, G, B, A halves in that order)
+  //  8-bit SDR: XRGB8888 (bytes B, G, R, X)
+  std::uint32_t drm_fourcc = 0;
+  std::size_t stride_bytes = 0;
+  std::vector<std::uint8_t> data;
+
+  // 16-bit RGB PNG samples, round(E' * 65535) from the signal value (not code << 6),
+  // for 10-bit modes; empty for scrgb and 8-bit SDR (whose PNG is the 8-bit codes).
+  std::vector<std::uint16_t> signal16;
+
+  // Display-referred linear light in the container primaries, cd/m2, RGBA float.
+  // Filled only when asked for (the EXR dump of an encoded frame).
+  std::optional<Image> display_nits;
+
+  ContentLightLevel content_light;
+  MasteringDisplay mastering;
+
+  // What produced it: tone curve and parameters, exposure, grading, UI, input.
+  // Merged into the JSON sidecar.
+  nlohmann::json settings = nlohmann::json::object();
+};
+
+}  // namespace hdrd
