@@ -29,6 +29,7 @@ struct ExrImage {
   std::vector<std::string> channels;                // channel names as stored
   std::string compression;                          // "zip", "piz", ...
   std::map<std::string, std::string> attributes;    // string attributes (hdrd writes its settings there)
+  std::vector<std::string> warnings;                // non-fatal oddities (single channel replicated, layer chosen, ...)
 
   // Matrix from the file's RGB (or XYZ) to linear Rec.2020 D65: Rec.709 when the file
   // says nothing; Bradford for non-D65 RGB; never adapted for XYZ.

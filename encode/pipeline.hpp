@@ -1,0 +1,99 @@
+// The encode pipeline (REFERENCE.md §1): scene light -> exposure -> relative scene value
+// -> [scene grade] -> tone curve -> display luminance (cd/m2) -> [display grade] ->
+// gamut mapping -> UI composite -> encoding -> DRM buffer + metadata.
+//
+// encode_frame() is the one entry point. It runs a fast path (baked LUTs, SIMD, threads)
+// whose tables are evaluated from the scalar reference functions in this module, and a
+// reference path (reference_encode_pixel) that tests use as the oracle.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "encode/color.hpp"
+#include "encode/display_target.hpp"
+#include "encode/exposure.hpp"
+#include "encode/frame.hpp"
+#include "encode/grade.hpp"
+#include "encode/image.hpp"
+#include "encode/result.hpp"
+#include "encode/tonemap.hpp"
+
+namespace hdrd {
+
+enum class InputUnits { relative, absolute };
+std::string_view to_string(InputUnits u);
+std::optional<InputUnits> parse_input_units(std::string_view s);
+
+enum class GamutMapping { ictcp, clip };  // REFERENCE.md §1.5
+std::string_view to_string(GamutMapping g);
+std::optional<GamutMapping> parse_gamut_mapping(std::string_view s);
+
+struct ToneSettings {
+  std::string curve;                       // empty: the mode's default (tonemap::default_curve)
+  tonemap::ParamValues params;
+  std::optional<tonemap::Apply> apply;     // empty: the curve's default
+};
+
+struct UiSettings {
+  std::shared_ptr<const OverlayImage> overlay;  // null: no UI
+  int x = 0, y = 0;                        // top-left position in output pixels
+  double scale = 1.0;                      // overlay pixel size in output pixels (bilinear)
+  bool srgb_blend = false;                 // blend in sRGB-encoded space (UIs authored that way)
+  double dim = 0.0;                        // darken the frame under the UI by dim * alpha
+};
+
+struct EncodeSettings {
+  DisplayTarget target = default_target(Mode::hdr10);
+  exposure::Settings exposure;
+  ToneSettings tone;
+  GamutMapping gamut = GamutMapping::ictcp;
+  UiSettings ui;
+  std::shared_ptr<const grade::Grade> grade;
+  bool dither = false;                     // ordered dither on code values (off in tests)
+  bool keep_display_nits = false;          // fill EncodedFrame::display_nits (EXR dumps)
+  int threads = 0;                         // 0: all hardware threads
+};
+
+// What the pipeline reads: linear light with a declared meaning.
+struct SceneInput {
+  const Image* image = nullptr;            // float RGBA, or
+  const ImageHalf* half = nullptr;         // half RGBA (GPU readback)
+  color::Mat3 to_working = color::to_working(color::Space::rec709);
+  InputUnits units = InputUnits::relative;
+  double white_luminance_nits = 1.0;       // absolute input: value * this = cd/m2
+  std::optional<double> illuminance_lux;   // dominant illuminance (light-based exposure)
+};
+
+// Everything resolved for one frame: the prepared curve, the metered exposure, the
+// matrices. Built once per request; shared by the CPU fast path and the GPU program.
+struct PreparedPipeline {
+  EncodeSettings settings;
+  std::shared_ptr<const tonemap::Curve> curve;
+  const tonemap::ToneCurveInfo* curve_info = nullptr;
+  tonemap::Apply apply = tonemap::Apply::max_rgb;
+  tonemap::ParamValues params;             // resolved
+  exposure::Metering metering;
+  color::Mat3 input_to_working;            // includes nothing but primaries
+  double scene_scale = 1.0;                // input value -> relative (exposure, units, compensation)
+  nlohmann::json describe() const;         // settings for the sidecar
+};
+
+// Validates settings and meters exposure on the input (auto modes read the image).
+Result<PreparedPipeline> prepare_pipeline(const SceneInput& input, const EncodeSettings& settings);
+
+// Reference path for one pixel: input RGB (as stored) -> display nits in the container
+// primaries after tone mapping, grading and gamut mapping (no UI). Double precision.
+color::Vec3 reference_display_nits(const PreparedPipeline& p, color::Vec3 input_rgb);
+// Display nits (container primaries) -> signal E' per channel for the mode (scrgb: value/80).
+color::Vec3 reference_signal(const DisplayTarget& t, color::Vec3 container_nits);
+
+// The whole frame.
+Result<EncodedFrame> encode_frame(const SceneInput& input, const EncodeSettings& settings);
+Result<EncodedFrame> encode_prepared(const SceneInput& input, const PreparedPipeline& prepared);
+
+}  // namespace hdrd
