@@ -51,11 +51,13 @@ double ev100_from_camera(double aperture_f, double shutter_s, double iso);
 // Lagarde & de Rousiers 2014: saturation-based sensitivity, q = 0.65, S = 100 -> 1.2.
 double scale_from_ev100(double ev100);
 
-// Meters luminance samples (already in the units of the input, Rec.2020 Y) and returns
-// the scale. `absolute` says whether the input is cd/m2 (camera and light modes need it);
-// for relative input in manual mode the scale is gain * 2^EV.
-Result<Metering> meter(const Settings& s, std::span<const float> luminance, bool absolute,
-                       double paper_white_nits);
+// Meters scene luminance samples in cd/m2 (Rec.2020 Y of the input converted to nits:
+// absolute input via its white luminance, relative input as value * paper white) and
+// returns the scale from cd/m2 to relative values. Manual mode: gain / paper white, so a
+// relative input passes unchanged and absolute paper-white luminance becomes 1.0.
+// Samples that are not finite are ignored. `luminance` may be empty for manual, camera
+// and light modes.
+Result<Metering> meter(const Settings& s, std::span<const float> luminance_nits, double paper_white_nits);
 
 // Temporal adaptation for sequences: exponential smoothing of log2(scale).
 class Adaptation {

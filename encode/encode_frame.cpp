@@ -1,0 +1,379 @@
+// Frame encoding: the staged row pipeline (input -> tone -> container/gamut -> UI ->
+// signal -> pack), run over row bands on worker threads. Tables come from the reference
+// functions (pipeline_internal.hpp), so this path and the reference agree to a code.
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <thread>
+#include <vector>
+
+#include "encode/fast_kernels.hpp"
+#include "encode/pipeline.hpp"
+#include "encode/pipeline_internal.hpp"
+#include "encode/transfer.hpp"
+
+namespace hdrd {
+
+using color::Mat3;
+using color::Vec3;
+using detail::SignalStage;
+using detail::ToneKind;
+using detail::ToneStage;
+
+namespace {
+
+struct Mat3f {
+  float m[9];
+  explicit Mat3f(const Mat3& a) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[i * 3 + j] = static_cast<float>(a.m[i][j]);
+  }
+};
+
+// The UI overlay converted once per frame: premultiplied linear container nits + alpha,
+// or (for sRGB-space blending) straight sRGB-encoded values + alpha.
+struct PreparedUi {
+  std::vector<float> px;
+  int w = 0, h = 0, x0 = 0, y0 = 0;
+  float scale = 1, dim = 0, white = 203;
+  bool srgb_blend = false;
+  bool active() const { return w > 0; }
+};
+
+PreparedUi prepare_ui(const PreparedPipeline& p) {
+  PreparedUi ui;
+  const auto& s = p.settings.ui;
+  if (!s.overlay) return ui;
+  const auto& o = *s.overlay;
+  ui.w = o.width;
+  ui.h = o.height;
+  ui.x0 = s.x;
+  ui.y0 = s.y;
+  ui.scale = static_cast<float>(s.scale);
+  ui.dim = static_cast<float>(s.dim);
+  ui.white = static_cast<float>(p.settings.target.ui_white_nits);
+  ui.srgb_blend = s.srgb_blend;
+  const Mat3 to_c = color::rgb_to_rgb(color::kRec709, p.settings.target.container());
+  ui.px.resize(o.rgba.size());
+  const std::size_t n = static_cast<std::size_t>(o.width) * o.height;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* q = &o.rgba[i * 4];
+    const double a = std::clamp<double>(q[3], 0.0, 1.0);
+    Vec3 enc{q[0], q[1], q[2]};
+    if (o.premultiplied) enc = a > 0 ? enc * (1.0 / a) : Vec3{};
+    if (ui.srgb_blend) {
+      ui.px[i * 4 + 0] = static_cast<float>(enc.x);
+      ui.px[i * 4 + 1] = static_cast<float>(enc.y);
+      ui.px[i * 4 + 2] = static_cast<float>(enc.z);
+    } else {
+      const Vec3 lin{transfer::srgb_eotf(enc.x), transfer::srgb_eotf(enc.y), transfer::srgb_eotf(enc.z)};
+      const Vec3 nits = to_c * lin * (p.settings.target.ui_white_nits * a);
+      ui.px[i * 4 + 0] = static_cast<float>(nits.x);
+      ui.px[i * 4 + 1] = static_cast<float>(nits.y);
+      ui.px[i * 4 + 2] = static_cast<float>(nits.z);
+    }
+    ui.px[i * 4 + 3] = static_cast<float>(a);
+  }
+  return ui;
+}
+
+// Bilinear sample of the prepared overlay at output pixel centre (x, y); alpha 0 outside.
+std::array<float, 4> sample_ui(const PreparedUi& ui, int x, int y) {
+  const float u = (x + 0.5f - ui.x0) / ui.scale - 0.5f;
+  const float v = (y + 0.5f - ui.y0) / ui.scale - 0.5f;
+  if (u < -0.5f || v < -0.5f || u > ui.w - 0.5f || v > ui.h - 0.5f) return {0, 0, 0, 0};
+  const float fu = std::floor(u), fv = std::floor(v);
+  const float tu = u - fu, tv = v - fv;
+  std::array<float, 4> out{};
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      const int sx = std::clamp(static_cast<int>(fu) + i, 0, ui.w - 1);
+      const int sy = std::clamp(static_cast<int>(fv) + j, 0, ui.h - 1);
+      const float wgt = (i ? tu : 1 - tu) * (j ? tv : 1 - tv);
+      const float* q = &ui.px[(static_cast<std::size_t>(sy) * ui.w + sx) * 4];
+      for (int c = 0; c < 4; ++c) out[c] += wgt * q[c];
+    }
+  return out;
+}
+
+// REFERENCE.md §1.6: blend over the display-referred frame in linear light (or in sRGB
+// encoding relative to UI white, for UIs authored that way).
+void composite_ui_row(const PreparedUi& ui, int y, int width, float* row) {
+  if (y + 0.5f < ui.y0 - ui.scale || y + 0.5f > ui.y0 + (ui.h + 0.5f) * ui.scale) return;
+  const int x_begin = std::max(0, static_cast<int>(std::floor(ui.x0 - ui.scale)));
+  const int x_end = std::min(width, static_cast<int>(std::ceil(ui.x0 + (ui.w + 1) * ui.scale)));
+  for (int x = x_begin; x < x_end; ++x) {
+    const auto s = sample_ui(ui, x, y);
+    const float a = s[3];
+    if (a <= 0) continue;
+    float* px = row + static_cast<std::size_t>(x) * 4;
+    const float keep = (1 - a) * (1 - ui.dim * a);
+    if (!ui.srgb_blend) {
+      for (int c = 0; c < 3; ++c) px[c] = s[c] + px[c] * keep;
+    } else {
+      // s holds alpha-weighted encoded values (bilinear of straight values would bleed).
+      for (int c = 0; c < 3; ++c) {
+        const double bg = transfer::srgb_inverse_eotf(std::clamp(px[c] * (1 - ui.dim * a) / ui.white, 0.0f, 1.0f));
+        const double enc = (a > 0 ? s[c] : 0) + bg * (1 - a);
+        px[c] = static_cast<float>(transfer::srgb_eotf(enc) * ui.white);
+      }
+    }
+  }
+}
+
+constexpr float kBayer8[64] = {
+    0, 32, 8, 40, 2, 34, 10, 42, 48, 16, 56, 24, 50, 18, 58, 26, 12, 44, 4, 36, 14, 46, 6, 38,
+    60, 28, 52, 20, 62, 30, 54, 22, 3, 35, 11, 43, 1, 33, 9, 41, 51, 19, 59, 27, 49, 17, 57, 25,
+    15, 47, 7, 39, 13, 45, 5, 37, 63, 31, 55, 23, 61, 29, 53, 21};
+
+struct ContentLightAccumulator {
+  double max_nits = 0;
+  double sum_nits = 0;
+};
+
+struct FrameJob {
+  const SceneInput* in;
+  const PreparedPipeline* p;
+  const ToneStage* tone;
+  const SignalStage* sig;
+  const PreparedUi* ui;
+  Mat3f m_in{Mat3::identity()};
+  Mat3f to_c{Mat3::identity()};
+  bool container_is_working = true;
+  EncodedFrame* frame;
+  int width = 0;
+};
+
+void stage_input(const FrameJob& job, int y, float* row) {
+  const std::size_t base = static_cast<std::size_t>(y) * job.width;
+  if (job.in->half)
+    kernels::half_rows_to_working(job.in->half->rgba.data() + base * 4, job.width, job.m_in.m, row);
+  else
+    kernels::float_rows_to_working(job.in->image->rgba.data() + base * 4, job.width, job.m_in.m, row);
+}
+
+void stage_tone(const FrameJob& job, float* row) {
+  const ToneStage& t = *job.tone;
+  const int n = job.width;
+  switch (t.kind) {
+    case ToneKind::clip:
+      kernels::tone_clip(row, n, t.paper_white, t.peak);
+      break;
+    case ToneKind::per_channel:
+      for (int i = 0; i < n * 4; i += 4)
+        for (int c = 0; c < 3; ++c) row[i + c] = t.lut(row[i + c]);
+      break;
+    case ToneKind::ratio:
+      kernels::tone_ratio(row, n, t.lut, t.ratio_of_luminance);
+      break;
+    case ToneKind::reference: {
+      const auto& p = *job.p;
+      for (int i = 0; i < n * 4; i += 4) {
+        const Vec3 nits = p.curve->map_rgb({row[i], row[i + 1], row[i + 2]}, p.apply) * p.settings.target.paper_white_nits;
+        row[i] = static_cast<float>(nits.x);
+        row[i + 1] = static_cast<float>(nits.y);
+        row[i + 2] = static_cast<float>(nits.z);
+      }
+      break;
+    }
+    case ToneKind::none:
+      break;
+  }
+}
+
+// Working nits -> container nits, gamut-mapping what does not fit (rare: only those
+// pixels take the ICtCp reference path).
+void stage_container(const FrameJob& job, float* row) {
+  const auto& t = job.p->settings.target;
+  const int n = job.width;
+  const float peak = static_cast<float>(t.peak_nits) * (1 + 1e-6f);
+  const bool map = t.mode != Mode::scrgb;
+  for (int i = 0; i < n * 4; i += 4) {
+    float r = row[i], g = row[i + 1], b = row[i + 2];
+    if (!job.container_is_working) {
+      const float* m = job.to_c.m;
+      const float cr = m[0] * r + m[1] * g + m[2] * b;
+      const float cg = m[3] * r + m[4] * g + m[5] * b;
+      const float cb = m[6] * r + m[7] * g + m[8] * b;
+      r = cr, g = cg, b = cb;
+    }
+    if (map && !(r >= 0 && g >= 0 && b >= 0 && r <= peak && g <= peak && b <= peak)) {
+      const Vec3 c = detail::gamut_map({row[i], row[i + 1], row[i + 2]}, t, job.p->settings.gamut);
+      r = static_cast<float>(c.x), g = static_cast<float>(c.y), b = static_cast<float>(c.z);
+    }
+    row[i] = r, row[i + 1] = g, row[i + 2] = b;
+  }
+}
+
+void stage_encode(const FrameJob& job, int y, const float* row, ContentLightAccumulator& cll) {
+  EncodedFrame& f = *job.frame;
+  const SignalStage& s = *job.sig;
+  const int n = job.width;
+  const bool dither = job.p->settings.dither;
+  const float* bayer_row = kBayer8 + (y & 7) * 8;
+  std::uint8_t* out = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes;
+  std::uint16_t* s16 = f.signal16.empty() ? nullptr : f.signal16.data() + static_cast<std::size_t>(y) * n * 3;
+  const bool narrow = s.code_offset != 0;
+
+  if (s.mode == Mode::scrgb) {
+    auto* o = reinterpret_cast<std::uint16_t*>(out);
+    const Mat3f to2020(color::rgb_to_rgb(color::kRec709, color::kRec2020));
+    for (int x = 0; x < n; ++x) {
+      const float* px = row + x * 4;
+      for (int c = 0; c < 3; ++c) o[x * 4 + c] = detail::float_to_half(px[c] * (1.0f / 80.0f));
+      o[x * 4 + 3] = 0x3C00;  // alpha 1.0
+      // MaxCLL of the Rec.2020 signal the scRGB frame would be sent as (REFERENCE.md §6).
+      const float* m = to2020.m;
+      const float r = detail::half_to_float(o[x * 4]) * 80, g = detail::half_to_float(o[x * 4 + 1]) * 80,
+                  b = detail::half_to_float(o[x * 4 + 2]) * 80;
+      const float mx = std::max({m[0] * r + m[1] * g + m[2] * b, m[3] * r + m[4] * g + m[5] * b,
+                                 m[6] * r + m[7] * g + m[8] * b, 0.0f});
+      cll.max_nits = std::max<double>(cll.max_nits, mx);
+      cll.sum_nits += mx;
+    }
+    return;
+  }
+
+  std::array<float, 3> e;
+  for (int x = 0; x < n; ++x) {
+    const float* px = row + x * 4;
+    if (s.mode == Mode::hlg) {
+      // BT.2100 inverse OOTF (luminance-based, not separable), then the OETF per channel.
+      const float r = std::max(px[0], 0.0f), g = std::max(px[1], 0.0f), b = std::max(px[2], 0.0f);
+      const float yd = 0.2627f * r + 0.6780f * g + 0.0593f * b;
+      const float k = yd > 0 ? std::pow(yd / s.hlg_peak, (1 - s.hlg_gamma) / s.hlg_gamma) / s.hlg_peak : 0.0f;
+      e = {s.signal(std::min(r * k, 1.0f)), s.signal(std::min(g * k, 1.0f)), s.signal(std::min(b * k, 1.0f))};
+      if (yd <= 0) e = {s.signal(0), s.signal(0), s.signal(0)};
+    } else {
+      e = {s.signal(px[0]), s.signal(px[1]), s.signal(px[2])};
+    }
+    const float bias = dither ? bayer_row[x & 7] * (1.0f / 64.0f) + (0.5f / 64.0f) : 0.5f;
+    int code[3];
+    for (int c = 0; c < 3; ++c) {
+      const float v = std::clamp(e[c], 0.0f, 1.0f);
+      code[c] = std::clamp(static_cast<int>(v * s.code_scale + s.code_offset + bias), 0, s.max_code);
+      if (s16) {
+        const float v16 = narrow ? code[c] * (65535.0f / 1023.0f) : v * 65535.0f;
+        s16[x * 3 + c] = static_cast<std::uint16_t>(std::lround(v16));
+      }
+    }
+    if (f.drm_fourcc == kDrmFormatXrgb8888) {
+      out[x * 4 + 0] = static_cast<std::uint8_t>(code[2]);
+      out[x * 4 + 1] = static_cast<std::uint8_t>(code[1]);
+      out[x * 4 + 2] = static_cast<std::uint8_t>(code[0]);
+      out[x * 4 + 3] = 0xFF;
+    } else {
+      const std::uint32_t w = static_cast<std::uint32_t>(code[0]) | (static_cast<std::uint32_t>(code[1]) << 10) |
+                              (static_cast<std::uint32_t>(code[2]) << 20) | (3u << 30);
+      std::memcpy(out + x * 4, &w, 4);
+    }
+    if (s.mode == Mode::hdr10) {
+      const float mx = s.code_to_nits[static_cast<std::size_t>(std::max({code[0], code[1], code[2]}))];
+      cll.max_nits = std::max<double>(cll.max_nits, mx);
+      cll.sum_nits += mx;
+    } else if (s.mode == Mode::hlg) {
+      const float er = s.code_to_nits[code[0]], eg = s.code_to_nits[code[1]], eb = s.code_to_nits[code[2]];
+      const float ys = 0.2627f * er + 0.6780f * eg + 0.0593f * eb;
+      const float k = ys > 0 ? s.hlg_peak * std::pow(ys, s.hlg_gamma - 1) : 0.0f;
+      const float mx = k * std::max({er, eg, eb});
+      cll.max_nits = std::max<double>(cll.max_nits, mx);
+      cll.sum_nits += mx;
+    }
+  }
+}
+
+void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll) {
+  std::vector<float> row(static_cast<std::size_t>(job.width) * 4);
+  const auto* g = job.p->settings.grade.get();
+  const auto placement = g ? g->placement() : grade::Placement::display;
+  for (int y = y_begin; y < y_end; ++y) {
+    stage_input(job, y, row.data());
+    if (g && placement != grade::Placement::display) g->apply(row.data(), job.width);
+    stage_tone(job, row.data());
+    if (g && placement == grade::Placement::display) g->apply(row.data(), job.width);
+    stage_container(job, row.data());
+    if (job.ui->active()) composite_ui_row(*job.ui, y, job.width, row.data());
+    if (job.frame->display_nits)
+      std::memcpy(job.frame->display_nits->px(0, y), row.data(), row.size() * sizeof(float));
+    stage_encode(job, y, row.data(), cll);
+  }
+}
+
+void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool keep_nits) {
+  f.target = t;
+  f.width = w;
+  f.height = h;
+  const bool eight_bit_sdr = (t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886) && t.bits == 8;
+  if (t.mode == Mode::scrgb) {
+    f.drm_fourcc = kDrmFormatAbgr16161616f;
+    f.stride_bytes = static_cast<std::size_t>(w) * 8;
+  } else if (eight_bit_sdr) {
+    f.drm_fourcc = kDrmFormatXrgb8888;
+    f.stride_bytes = static_cast<std::size_t>(w) * 4;
+  } else {
+    f.drm_fourcc = kDrmFormatXbgr2101010;
+    f.stride_bytes = static_cast<std::size_t>(w) * 4;
+    f.signal16.resize(static_cast<std::size_t>(w) * h * 3);
+  }
+  f.data.resize(f.stride_bytes * h);
+  if (keep_nits) f.display_nits.emplace(w, h);
+  if (f.display_nits)
+    for (std::size_t i = 3; i < f.display_nits->rgba.size(); i += 4) f.display_nits->rgba[i] = 1.0f;
+  f.mastering = t.mastering();
+}
+
+}  // namespace
+
+Result<EncodedFrame> encode_prepared(const SceneInput& in, const PreparedPipeline& p) {
+  const auto& t = p.settings.target;
+  const int w = in.image ? in.image->width : in.half->width;
+  const int h = in.image ? in.image->height : in.half->height;
+  const ToneStage tone = detail::build_tone_stage(p);
+  const SignalStage sig = detail::build_signal_stage(t);
+  const PreparedUi ui = prepare_ui(p);
+
+  EncodedFrame frame;
+  setup_frame(frame, t, w, h, p.settings.keep_display_nits);
+  FrameJob job{&in, &p, &tone, &sig, &ui};
+  job.m_in = Mat3f(p.input_to_working * Mat3{{{{p.scene_scale, 0, 0}, {0, p.scene_scale, 0}, {0, 0, p.scene_scale}}}});
+  job.to_c = Mat3f(detail::working_to_container(t));
+  job.container_is_working = t.container() == color::kRec2020;
+  job.frame = &frame;
+  job.width = w;
+
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hw, 1, std::max(1, h));
+  std::vector<ContentLightAccumulator> cll(static_cast<std::size_t>(threads));
+  if (threads == 1) {
+    run_rows(job, 0, h, cll[0]);
+  } else {
+    // Bands of rows handed out dynamically so a slow band (gamut mapping, UI) doesn't stall others.
+    constexpr int kBand = 16;
+    std::atomic<int> next{0};
+    std::vector<std::thread> pool;
+    for (int i = 0; i < threads; ++i)
+      pool.emplace_back([&, i] {
+        for (int y0 = next.fetch_add(kBand); y0 < h; y0 = next.fetch_add(kBand))
+          run_rows(job, y0, std::min(h, y0 + kBand), cll[static_cast<std::size_t>(i)]);
+      });
+    for (auto& th : pool) th.join();
+  }
+  double max_nits = 0, sum = 0;
+  for (const auto& c : cll) {
+    max_nits = std::max(max_nits, c.max_nits);
+    sum += c.sum_nits;
+  }
+  frame.content_light = {max_nits, sum / (static_cast<double>(w) * h)};
+  frame.settings = p.describe();
+  return frame;
+}
+
+Result<EncodedFrame> encode_frame(const SceneInput& in, const EncodeSettings& s) {
+  auto p = prepare_pipeline(in, s);
+  if (!p) return p.error();
+  return encode_prepared(in, *p);
+}
+
+}  // namespace hdrd

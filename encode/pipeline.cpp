@@ -1,0 +1,353 @@
+// The encode pipeline: preparation (validation, metering, curve), the double-precision
+// reference path, and the frame encoder that runs the staged fast path over rows.
+#include "encode/pipeline.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <bit>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "encode/pipeline_internal.hpp"
+#include "encode/transfer.hpp"
+
+namespace hdrd {
+
+using color::Mat3;
+using color::Vec3;
+
+std::string_view to_string(InputUnits u) { return u == InputUnits::relative ? "relative" : "absolute"; }
+std::optional<InputUnits> parse_input_units(std::string_view s) {
+  if (s == "relative") return InputUnits::relative;
+  if (s == "absolute") return InputUnits::absolute;
+  return std::nullopt;
+}
+std::string_view to_string(GamutMapping g) { return g == GamutMapping::ictcp ? "ictcp" : "clip"; }
+std::optional<GamutMapping> parse_gamut_mapping(std::string_view s) {
+  if (s == "ictcp") return GamutMapping::ictcp;
+  if (s == "clip") return GamutMapping::clip;
+  return std::nullopt;
+}
+
+namespace detail {
+
+// NaN/Inf rule (documented in docs/encoding.md): NaN -> 0; +-Inf and magnitudes above
+// 1e30 -> +-1e30, which the tone curve rolls off to the peak. Codes never see a NaN.
+constexpr double kMaxSceneMagnitude = 1e30;
+Vec3 sanitize(Vec3 v) {
+  auto s = [](double x) { return std::isnan(x) ? 0.0 : std::clamp(x, -kMaxSceneMagnitude, kMaxSceneMagnitude); };
+  return {s(v.x), s(v.y), s(v.z)};
+}
+
+Mat3 working_to_container(const DisplayTarget& t) {
+  return t.container() == color::kRec2020 ? Mat3::identity() : color::rgb_to_rgb(color::kRec2020, t.container());
+}
+
+namespace {
+bool in_gamut(Vec3 c, double peak, double tol) {
+  const double lo = -tol * peak, hi = peak * (1 + tol);
+  return c.x >= lo && c.y >= lo && c.z >= lo && c.x <= hi && c.y <= hi && c.z <= hi;
+}
+Vec3 clamp_to(Vec3 c, double peak) {
+  return {std::clamp(c.x, 0.0, peak), std::clamp(c.y, 0.0, peak), std::clamp(c.z, 0.0, peak)};
+}
+}  // namespace
+
+// REFERENCE.md §1.5: constant-hue, constant-intensity desaturation in ICtCp toward the
+// achromatic axis until the colour fits [0, peak] in the container; intensity is capped at
+// the peak's (an achromatic colour there always fits). scRGB is not mapped.
+Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g) {
+  const Mat3 to_c = working_to_container(t);
+  Vec3 c = to_c * working_nits;
+  if (t.mode == Mode::scrgb) return c;
+  const double peak = t.peak_nits;
+  if (in_gamut(c, peak, 0)) return c;
+  if (g == GamutMapping::clip) return clamp_to(c, peak);
+  const Vec3 ictcp = color::rec2020_nits_to_ictcp(
+      {std::max(working_nits.x, 0.0), std::max(working_nits.y, 0.0), std::max(working_nits.z, 0.0)});
+  const double i = std::min(ictcp.x, transfer::pq_inverse_eotf(peak));
+  auto at = [&](double s) { return to_c * color::ictcp_to_rec2020_nits({i, ictcp.y * s, ictcp.z * s}); };
+  double lo = 0, hi = 1;
+  if (in_gamut(at(1.0), peak, 1e-6)) return clamp_to(at(1.0), peak);
+  for (int it = 0; it < 24; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (in_gamut(at(mid), peak, 1e-6) ? lo : hi) = mid;
+  }
+  return clamp_to(at(lo), peak);
+}
+
+ToneStage build_tone_stage(const PreparedPipeline& p) {
+  ToneStage s;
+  const auto& t = p.settings.target;
+  s.paper_white = static_cast<float>(t.paper_white_nits);
+  s.peak = static_cast<float>(t.peak_nits);
+  if (p.settings.grade && p.settings.grade->placement() == grade::Placement::baked) {
+    s.kind = ToneKind::none;
+    return s;
+  }
+  const auto* curve = p.curve.get();
+  const double pw = t.paper_white_nits;
+  if (p.curve_info->name == "clip") {
+    s.kind = ToneKind::clip;
+  } else if (p.apply == tonemap::Apply::per_channel) {
+    s.kind = ToneKind::per_channel;
+    s.lut = FloatBitsLut([=](double x) { return curve->map(x) * pw; }, -24, 24);
+  } else if (p.apply == tonemap::Apply::max_rgb || p.apply == tonemap::Apply::luminance) {
+    s.kind = ToneKind::ratio;
+    s.ratio_of_luminance = p.apply == tonemap::Apply::luminance;
+    s.lut = FloatBitsLut([=](double m) { return curve->map(m) * pw / m; }, -24, 24);
+  } else {
+    s.kind = ToneKind::reference;
+  }
+  return s;
+}
+
+SignalStage build_signal_stage(const DisplayTarget& t) {
+  SignalStage s;
+  s.mode = t.mode;
+  const int bits = t.mode == Mode::scrgb ? 16 : t.bits;
+  s.max_code = (1 << std::min(bits, 16)) - 1;
+  if (t.range == Range::narrow) {
+    s.code_scale = static_cast<float>(219.0 * std::ldexp(1.0, bits - 8));
+    s.code_offset = static_cast<float>(16.0 * std::ldexp(1.0, bits - 8));
+  } else {
+    s.code_scale = static_cast<float>(s.max_code);
+    s.code_offset = 0;
+  }
+  const double peak = t.peak_nits;
+  switch (t.mode) {
+    case Mode::hdr10:
+      s.signal = FloatBitsLut([](double n) { return transfer::pq_inverse_eotf(n); }, -24, 14);
+      break;
+    case Mode::sdr:
+      if (t.sdr_curve == SdrCurve::srgb)
+        s.signal = FloatBitsLut([=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); }, -24, 14);
+      else
+        s.signal = FloatBitsLut([=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); }, -24, 14);
+      break;
+    case Mode::sdr_bt1886: {
+      const auto b = transfer::Bt1886::from_levels(peak, t.black_nits);
+      s.signal = FloatBitsLut([=](double n) { return b.inverse_eotf(n); }, -24, 14);
+      break;
+    }
+    case Mode::hlg:
+      s.hlg_peak = static_cast<float>(peak);
+      s.hlg_gamma = static_cast<float>(transfer::hlg_system_gamma(peak));
+      s.signal = FloatBitsLut([](double e) { return transfer::hlg_oetf(std::min(e, 1.0)); }, -30, 1);
+      break;
+    case Mode::scrgb:
+      break;
+  }
+  if (t.mode == Mode::hdr10 || t.mode == Mode::hlg) {
+    s.code_to_nits.resize(static_cast<std::size_t>(s.max_code) + 1);
+    for (int c = 0; c <= s.max_code; ++c) {
+      const double e = t.range == Range::narrow ? std::clamp(transfer::dequantize_narrow(c, bits), 0.0, 1.0)
+                                                : transfer::dequantize_full(c, bits);
+      // HLG: the inverse OETF (scene light E); the OOTF is applied per pixel.
+      s.code_to_nits[static_cast<std::size_t>(c)] =
+          static_cast<float>(t.mode == Mode::hdr10 ? transfer::pq_eotf(e) : transfer::hlg_inverse_oetf(e));
+    }
+  }
+  return s;
+}
+
+// IEEE binary16 conversions (round to nearest even; overflow to Inf; NaN kept NaN).
+std::uint16_t float_to_half(float f) {
+  const std::uint32_t x = std::bit_cast<std::uint32_t>(f);
+  const std::uint32_t sign = (x >> 16) & 0x8000u;
+  const std::uint32_t absx = x & 0x7FFFFFFFu;
+  if (absx >= 0x7F800000u) return static_cast<std::uint16_t>(sign | (absx > 0x7F800000u ? 0x7E00u : 0x7C00u));
+  if (absx >= 0x477FF000u) return static_cast<std::uint16_t>(sign | 0x7C00u);  // rounds to >= 65520: Inf
+  if (absx < 0x38800000u) {  // subnormal half (or zero)
+    const float a = std::bit_cast<float>(absx);
+    return static_cast<std::uint16_t>(sign | static_cast<std::uint32_t>(std::nearbyint(a * 16777216.0f)));
+  }
+  const std::uint32_t mant_odd = (absx >> 13) & 1u;
+  const std::uint32_t rounded = absx + 0xC8000FFFu + mant_odd;  // rebias exponent (-112 << 23) and round
+  return static_cast<std::uint16_t>(sign | (rounded >> 13));
+}
+
+float half_to_float(std::uint16_t h) {
+  const std::uint32_t sign = (static_cast<std::uint32_t>(h) & 0x8000u) << 16;
+  const std::uint32_t exp = (h >> 10) & 0x1Fu, mant = h & 0x3FFu;
+  if (exp == 0) {
+    const float v = static_cast<float>(mant) * (1.0f / 16777216.0f);
+    return sign ? -v : v;
+  }
+  if (exp == 31) return std::bit_cast<float>(sign | 0x7F800000u | (mant << 13));
+  return std::bit_cast<float>(sign | ((exp + 112) << 23) | (mant << 13));
+}
+
+}  // namespace detail
+
+// ---- Preparation -------------------------------------------------------------------------
+
+namespace {
+
+Result<void> check_input(const SceneInput& in) {
+  if (!in.image && !in.half) return make_error("encode.input", "no input image");
+  const int w = in.image ? in.image->width : in.half->width;
+  const int h = in.image ? in.image->height : in.half->height;
+  if (auto ok = check_image_size(w, h); !ok) return ok.error();
+  if (in.units == InputUnits::absolute && !(in.white_luminance_nits > 0 && std::isfinite(in.white_luminance_nits)))
+    return make_error("encode.input", fmt::format("white luminance {} cd/m2 must be > 0", in.white_luminance_nits),
+                      "input.white_luminance");
+  return {};
+}
+
+Vec3 input_pixel(const SceneInput& in, std::size_t i) {
+  if (in.image) {
+    const float* p = in.image->rgba.data() + i * 4;
+    return {p[0], p[1], p[2]};
+  }
+  const std::uint16_t* p = in.half->rgba.data() + i * 4;
+  return {detail::half_to_float(p[0]), detail::half_to_float(p[1]), detail::half_to_float(p[2])};
+}
+
+// Scene luminance in cd/m2 of (a subsample of) the input, for the auto-exposure modes.
+std::vector<float> metering_samples(const SceneInput& in, double unit_nits) {
+  const std::size_t n = in.image ? in.image->pixel_count() : in.half->pixel_count();
+  const std::size_t step = std::max<std::size_t>(1, n / (1u << 21));  // at most ~2 Mpx
+  const Vec3 luma{color::kRec2020Luma.x * in.to_working.m[0][0] + color::kRec2020Luma.y * in.to_working.m[1][0] +
+                      color::kRec2020Luma.z * in.to_working.m[2][0],
+                  color::kRec2020Luma.x * in.to_working.m[0][1] + color::kRec2020Luma.y * in.to_working.m[1][1] +
+                      color::kRec2020Luma.z * in.to_working.m[2][1],
+                  color::kRec2020Luma.x * in.to_working.m[0][2] + color::kRec2020Luma.y * in.to_working.m[1][2] +
+                      color::kRec2020Luma.z * in.to_working.m[2][2]};
+  std::vector<float> out;
+  out.reserve(n / step + 1);
+  for (std::size_t i = 0; i < n; i += step) {
+    const Vec3 v = input_pixel(in, i);
+    out.push_back(static_cast<float>(color::dot(luma, v) * unit_nits));
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSettings& s) {
+  if (auto ok = validate(s.target); !ok) return ok.error();
+  if (auto ok = check_input(in); !ok) return ok.error();
+  if (!(s.threads >= 0 && s.threads <= 256)) return make_error("encode.threads", "threads must be in [0, 256]", "threads");
+  PreparedPipeline p;
+  p.settings = s;
+  const auto& t = s.target;
+  const std::string curve_name = s.tone.curve.empty() ? std::string(tonemap::default_curve(t.mode)) : s.tone.curve;
+  p.curve_info = tonemap::find_curve(curve_name);
+  if (!p.curve_info) {
+    auto e = tonemap::prepare(curve_name, {});  // produces the "unknown tone curve" message
+    return e.error();
+  }
+  auto params = tonemap::resolve_params(*p.curve_info, s.tone.params);
+  if (!params) return params.error();
+  p.params = *params;
+  const tonemap::Display display{t.peak_nits, t.black_nits, t.paper_white_nits};
+  p.curve = p.curve_info->prepare(display, p.params);
+  p.apply = s.tone.apply.value_or(p.curve_info->default_apply);
+  if (!p.curve_info->scalar) {
+    if (s.tone.apply && *s.tone.apply != tonemap::Apply::rgb)
+      return make_error("tonemap.apply", fmt::format("tone curve '{}' is an RGB operator; it cannot be applied {}",
+                                                     p.curve_info->name, tonemap::to_string(*s.tone.apply)),
+                        "tone.apply");
+    p.apply = tonemap::Apply::rgb;
+  } else if (p.apply == tonemap::Apply::rgb) {
+    p.apply = tonemap::Apply::per_channel;
+  }
+  if (s.ui.overlay) {
+    if (s.ui.overlay->width <= 0 || s.ui.overlay->height <= 0) return make_error("ui.overlay", "UI overlay is empty", "ui");
+    if (!(s.ui.scale > 0 && s.ui.scale <= 64)) return make_error("ui.scale", "UI scale must be in (0, 64]", "ui.scale");
+    if (!(s.ui.dim >= 0 && s.ui.dim <= 1)) return make_error("ui.dim", "UI dim must be in [0, 1]", "ui.dim");
+  }
+  const double unit_nits = in.units == InputUnits::absolute ? in.white_luminance_nits : t.paper_white_nits;
+  exposure::Settings ex = s.exposure;
+  if (!ex.illuminance_lux && in.illuminance_lux && *in.illuminance_lux > 0) ex.illuminance_lux = in.illuminance_lux;
+  std::vector<float> samples;
+  if (ex.mode == exposure::Mode::log_average || ex.mode == exposure::Mode::histogram)
+    samples = metering_samples(in, unit_nits);
+  auto m = exposure::meter(ex, samples, t.paper_white_nits);
+  if (!m) return m.error();
+  p.metering = *m;
+  p.settings.exposure = ex;
+  p.input_to_working = in.to_working;
+  p.scene_scale = unit_nits * m->scale;
+  return p;
+}
+
+nlohmann::json PreparedPipeline::describe() const {
+  nlohmann::json j;
+  j["tone_curve"] = {{"name", curve_info ? curve_info->name : ""},
+                     {"apply", tonemap::to_string(apply)},
+                     {"params", params}};
+  const auto& ex = settings.exposure;
+  j["exposure"] = {{"mode", exposure::to_string(ex.mode)},
+                   {"compensation_ev", ex.compensation_ev},
+                   {"scale", metering.scale},
+                   {"metered", metering.metered},
+                   {"scene_scale", scene_scale}};
+  if (metering.ev100) j["exposure"]["ev100"] = *metering.ev100;
+  if (ex.mode == exposure::Mode::histogram)
+    j["exposure"]["percentile"] = {{"percentile", ex.percentile}, {"target", ex.percentile_target},
+                                   {"ignore_dark", ex.ignore_dark_fraction}, {"ignore_bright", ex.ignore_bright_fraction}};
+  j["gamut_mapping"] = to_string(settings.gamut);
+  j["dither"] = settings.dither;
+  if (settings.grade) j["grade"] = settings.grade->describe();
+  if (settings.ui.overlay)
+    j["ui"] = {{"width", settings.ui.overlay->width}, {"height", settings.ui.overlay->height},
+               {"x", settings.ui.x}, {"y", settings.ui.y}, {"scale", settings.ui.scale},
+               {"blend", settings.ui.srgb_blend ? "srgb" : "linear"}, {"dim", settings.ui.dim},
+               {"premultiplied", settings.ui.overlay->premultiplied}};
+  return j;
+}
+
+// ---- Reference path ----------------------------------------------------------------------
+
+Vec3 reference_display_nits(const PreparedPipeline& p, Vec3 input_rgb) {
+  const auto& t = p.settings.target;
+  Vec3 w = p.input_to_working * detail::sanitize(input_rgb) * p.scene_scale;
+  const auto* g = p.settings.grade.get();
+  auto apply_grade = [&](Vec3 v) {
+    float px[4] = {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), 1.0f};
+    g->apply(px, 1);
+    return Vec3{px[0], px[1], px[2]};
+  };
+  Vec3 nits;
+  if (g && g->placement() == grade::Placement::baked) {
+    nits = apply_grade(w);
+  } else {
+    if (g && g->placement() == grade::Placement::scene) w = apply_grade(w);
+    w = {std::max(w.x, 0.0), std::max(w.y, 0.0), std::max(w.z, 0.0)};
+    nits = p.curve->map_rgb(w, p.apply) * t.paper_white_nits;
+    if (g && g->placement() == grade::Placement::display) nits = apply_grade(nits);
+  }
+  return detail::gamut_map(nits, t, p.settings.gamut);
+}
+
+Vec3 reference_signal(const DisplayTarget& t, Vec3 n) {
+  switch (t.mode) {
+    case Mode::hdr10:
+      return {transfer::pq_inverse_eotf(n.x), transfer::pq_inverse_eotf(n.y), transfer::pq_inverse_eotf(n.z)};
+    case Mode::hlg:
+      return transfer::hlg_inverse_eotf(n, t.peak_nits);
+    case Mode::scrgb:
+      return n * (1.0 / transfer::kScrgbUnitNits);
+    case Mode::sdr: {
+      auto f = [&](double v) {
+        const double l = std::clamp(v / t.peak_nits, 0.0, 1.0);
+        return t.sdr_curve == SdrCurve::srgb ? transfer::srgb_inverse_eotf(l) : transfer::gamma22_inverse_eotf(l);
+      };
+      return {f(n.x), f(n.y), f(n.z)};
+    }
+    case Mode::sdr_bt1886: {
+      const auto b = transfer::Bt1886::from_levels(t.peak_nits, t.black_nits);
+      return {b.inverse_eotf(n.x), b.inverse_eotf(n.y), b.inverse_eotf(n.z)};
+    }
+  }
+  return n;
+}
+
+}  // namespace hdrd

@@ -1,0 +1,51 @@
+// Internal pieces of the encode pipeline shared by pipeline.cpp, the fast kernels and the
+// GPU program generator: stage tables built from the reference functions.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "encode/float_lut.hpp"
+#include "encode/pipeline.hpp"
+
+namespace hdrd::detail {
+
+// How the tone stage runs in the fast path.
+enum class ToneKind {
+  clip,         // exact: min(x * paper_white, peak) per channel
+  per_channel,  // value LUT per channel
+  ratio,        // ratio LUT of max(RGB) or luminance, applied to all channels
+  reference,    // per-pixel reference (RGB operators such as AgX, the ICtCp mapper)
+  none,         // a baked grade holds the tone curve
+};
+
+struct ToneStage {
+  ToneKind kind = ToneKind::reference;
+  bool ratio_of_luminance = false;  // ratio: luminance instead of max(RGB)
+  FloatBitsLut lut;                 // per_channel: nits(x); ratio: nits(m)/m
+  float paper_white = 203, peak = 1000;
+};
+
+// Encoding of container-primaries display nits into the mode's signal.
+struct SignalStage {
+  Mode mode = Mode::hdr10;
+  FloatBitsLut signal;              // nits -> E' (pq, srgb, gamma 2.2, BT.1886); HLG: E -> E'
+  float code_scale = 1023, code_offset = 0;  // code = E' * scale + offset (before rounding)
+  int max_code = 1023;
+  float hlg_peak = 1000, hlg_gamma = 1.2f;
+  std::vector<float> code_to_nits;  // for MaxCLL/MaxFALL: decoded display light per code
+};
+
+ToneStage build_tone_stage(const PreparedPipeline& p);
+SignalStage build_signal_stage(const DisplayTarget& t);
+
+// Reference helpers (double precision).
+color::Vec3 sanitize(color::Vec3 v);
+color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMapping g);
+color::Mat3 working_to_container(const DisplayTarget& t);
+
+// Converts float <-> IEEE half (round to nearest even).
+std::uint16_t float_to_half(float f);
+float half_to_float(std::uint16_t h);
+
+}  // namespace hdrd::detail

@@ -1,0 +1,270 @@
+// The frame encoder against the double-precision reference path and against values
+// from REFERENCE.md (§1.7 encodings, §2 PQ table, BT.2408 levels) computed independently
+// here from the published constants.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "encode/pipeline.hpp"
+#include "encode/pipeline_internal.hpp"
+#include "encode/transfer.hpp"
+
+using namespace hdrd;
+using color::Vec3;
+
+namespace {
+
+Image solid(int w, int h, Vec3 c) {
+  Image img(w, h);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    img.rgba[i * 4] = static_cast<float>(c.x);
+    img.rgba[i * 4 + 1] = static_cast<float>(c.y);
+    img.rgba[i * 4 + 2] = static_cast<float>(c.z);
+    img.rgba[i * 4 + 3] = 1;
+  }
+  return img;
+}
+
+std::array<int, 3> codes_at(const EncodedFrame& f, int x, int y) {
+  const std::uint8_t* p = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes + static_cast<std::size_t>(x) * 4;
+  if (f.drm_fourcc == kDrmFormatXrgb8888) return {p[2], p[1], p[0]};
+  std::uint32_t w;
+  std::memcpy(&w, p, 4);
+  return {static_cast<int>(w & 1023), static_cast<int>((w >> 10) & 1023), static_cast<int>((w >> 20) & 1023)};
+}
+
+EncodedFrame encode(const Image& img, EncodeSettings s) {
+  SceneInput in;
+  in.image = &img;
+  auto r = encode_frame(in, s);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return std::move(r).value();
+}
+
+EncodeSettings settings(Mode m, std::string curve = "clip") {
+  EncodeSettings s;
+  s.target = default_target(m);
+  s.tone.curve = std::move(curve);
+  s.threads = 1;
+  return s;
+}
+
+TEST(Encode, PaperWhiteLandsOnPq594FullAnd573Narrow) {
+  const Image white = solid(4, 2, {1, 1, 1});
+  for (const char* curve : {"clip", "pq-shoulder", "bt2390", "ictcp"}) {
+    auto f = encode(white, settings(Mode::hdr10, curve));
+    EXPECT_EQ(codes_at(f, 0, 0), (std::array<int, 3>{594, 594, 594})) << curve;
+    auto s = settings(Mode::hdr10, curve);
+    s.target.range = Range::narrow;
+    EXPECT_EQ(codes_at(encode(white, s), 1, 1), (std::array<int, 3>{573, 573, 573})) << curve;
+  }
+}
+
+TEST(Encode, PqTableThroughTheWholeEncoder) {
+  // REFERENCE.md §2: absolute luminance -> 10-bit full / narrow codes.
+  const std::pair<double, std::array<int, 2>> table[] = {
+      {0.005, {15, 77}}, {0.1, {64, 119}},  {1, {153, 195}},   {26, {389, 397}},   {80, {497, 490}},
+      {100, {520, 509}}, {203, {594, 573}}, {400, {668, 636}}, {1000, {769, 723}}, {4000, {923, 855}}};
+  for (const auto& [nits, codes] : table) {
+    Image img = solid(2, 1, {nits, nits, nits});
+    auto s = settings(Mode::hdr10);
+    s.target.peak_nits = 10000;
+    SceneInput in;
+    in.image = &img;
+    in.units = InputUnits::absolute;
+    in.white_luminance_nits = 1.0;  // values are cd/m2
+    auto f = encode_frame(in, s);
+    ASSERT_TRUE(f.ok());
+    EXPECT_EQ(codes_at(*f, 0, 0)[1], codes[0]) << nits;
+    s.target.range = Range::narrow;
+    EXPECT_EQ(codes_at(*encode_frame(in, s), 1, 0)[1], codes[1]) << nits;
+  }
+}
+
+TEST(Encode, HlgReferenceWhiteAt75Percent) {
+  auto f = encode(solid(2, 2, {1, 1, 1}), settings(Mode::hlg));
+  EXPECT_NEAR(codes_at(f, 0, 0)[0], std::lround(0.75 * 1023), 1);  // BT.2408: 203 cd/m2 = 75 % HLG
+}
+
+TEST(Encode, ScrgbWhiteIsPaperWhiteOver80AndNegativesKept) {
+  auto s = settings(Mode::scrgb);
+  s.keep_display_nits = true;
+  const Image img = solid(2, 1, {1, 1, 1});
+  auto f = encode(img, s);
+  const auto* h = reinterpret_cast<const std::uint16_t*>(f.data.data());
+  EXPECT_NEAR(detail::half_to_float(h[0]), 203.0 / 80.0, 1e-3);
+  EXPECT_EQ(h[3], 0x3C00);
+  EXPECT_EQ(f.drm_fourcc, kDrmFormatAbgr16161616f);
+  // A pure Rec.2020 green is outside Rec.709: scRGB carries it with negative red/blue.
+  SceneInput in;
+  Image g = solid(1, 1, {0, 1, 0});
+  in.image = &g;
+  in.to_working = color::Mat3::identity();  // input already Rec.2020
+  auto fg = encode_frame(in, s);
+  ASSERT_TRUE(fg.ok());
+  const auto* hg = reinterpret_cast<const std::uint16_t*>(fg->data.data());
+  EXPECT_LT(detail::half_to_float(hg[0]), 0.0f);
+  EXPECT_LT(detail::half_to_float(hg[2]), 0.0f);
+}
+
+TEST(Encode, SdrWhiteIs255AndBt1886UsesBlack) {
+  auto f = encode(solid(1, 1, {1, 1, 1}), settings(Mode::sdr));
+  EXPECT_EQ(codes_at(f, 0, 0), (std::array<int, 3>{255, 255, 255}));
+  EXPECT_EQ(f.drm_fourcc, kDrmFormatXrgb8888);
+  // sRGB: relative 0.18 -> 0.4614 -> code 118 (REFERENCE.md §2).
+  EXPECT_EQ(codes_at(encode(solid(1, 1, {0.18, 0.18, 0.18}), settings(Mode::sdr)), 0, 0)[0], 118);
+  // BT.1886 with Lb = 0.1: 0.1 cd/m2 (relative 0.001) is the display's black -> code 0.
+  EXPECT_EQ(codes_at(encode(solid(1, 1, {0.001, 0.001, 0.001}), settings(Mode::sdr_bt1886)), 0, 0)[0], 0);
+  auto s10 = settings(Mode::sdr);
+  s10.target.bits = 10;
+  auto f10 = encode(solid(1, 1, {1, 1, 1}), s10);
+  EXPECT_EQ(codes_at(f10, 0, 0)[0], 1023);
+  EXPECT_EQ(f10.drm_fourcc, kDrmFormatXbgr2101010);
+}
+
+TEST(Encode, Rec709PrimariesLandOnTheirRec2020Coordinates) {
+  // BT.2087: 709 red = (0.6274, 0.0691, 0.0164) in Rec.2020; with clip at 1000 cd/m2 the
+  // codes are PQ of those fractions of 203 cd/m2: no over-saturation of SDR content.
+  auto f = encode(solid(1, 1, {1, 0, 0}), settings(Mode::hdr10));
+  const auto c = codes_at(f, 0, 0);
+  EXPECT_NEAR(c[0], std::lround(transfer::pq_inverse_eotf(0.6274 * 203) * 1023), 1);
+  EXPECT_NEAR(c[1], std::lround(transfer::pq_inverse_eotf(0.0691 * 203) * 1023), 1);
+  EXPECT_NEAR(c[2], std::lround(transfer::pq_inverse_eotf(0.0164 * 203) * 1023), 1);
+}
+
+TEST(Encode, ContentLightLevelsComeFromDecodedCodes) {
+  Image img(4, 1);
+  const double values[4] = {0.5, 1.0, 2.0, 3.0};
+  for (int i = 0; i < 4; ++i) {
+    img.rgba[i * 4] = static_cast<float>(values[i]);
+    img.rgba[i * 4 + 1] = img.rgba[i * 4 + 2] = 0.1f;
+  }
+  auto f = encode(img, settings(Mode::hdr10));
+  double mx = 0, sum = 0;
+  for (int x = 0; x < 4; ++x) {
+    const auto c = codes_at(f, x, 0);
+    const double nits = transfer::pq_eotf(std::max({c[0], c[1], c[2]}) / 1023.0);
+    mx = std::max(mx, nits);
+    sum += nits;
+  }
+  EXPECT_NEAR(f.content_light.max_cll_nits, mx, 1e-3);
+  EXPECT_NEAR(f.content_light.max_fall_nits, sum / 4, 1e-3);
+}
+
+TEST(Encode, NanInfAndNegativesFollowTheDocumentedRule) {
+  Image img(5, 1);
+  const float vals[5] = {NAN, INFINITY, -INFINITY, -1.0f, 1e38f};
+  for (int i = 0; i < 5; ++i) img.rgba[i * 4] = img.rgba[i * 4 + 1] = img.rgba[i * 4 + 2] = vals[i];
+  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::sdr, Mode::sdr_bt1886}) {
+    auto f = encode(img, settings(m, "pq-shoulder"));
+    const int black = codes_at(encode(solid(1, 1, {0, 0, 0}), settings(m, "pq-shoulder")), 0, 0)[0];
+    EXPECT_EQ(codes_at(f, 0, 0)[0], black) << "NaN -> black, mode " << to_string(m);
+    EXPECT_EQ(codes_at(f, 2, 0)[0], black) << "-Inf -> black";
+    EXPECT_EQ(codes_at(f, 3, 0)[0], black) << "negative -> black";
+    EXPECT_EQ(codes_at(f, 1, 0), codes_at(f, 4, 0)) << "+Inf behaves as a huge value";
+    EXPECT_TRUE(std::isfinite(f.content_light.max_cll_nits));
+  }
+}
+
+TEST(Encode, ThreadsDoNotChangeTheResult) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0, 8);
+  Image img(97, 53);
+  for (auto& v : img.rgba) v = u(rng);
+  auto s1 = settings(Mode::hdr10, "pq-shoulder");
+  auto s2 = s1;
+  s2.threads = 2;
+  auto a = encode(img, s1), b = encode(img, s2);
+  EXPECT_EQ(a.data, b.data);
+  EXPECT_EQ(a.signal16, b.signal16);
+  EXPECT_DOUBLE_EQ(a.content_light.max_cll_nits, b.content_light.max_cll_nits);
+}
+
+// The fast path (LUTs, float) against the double reference, per mode and curve kind.
+struct Case {
+  Mode mode;
+  const char* curve;
+};
+class FastVsReference : public ::testing::TestWithParam<Case> {};
+
+TEST_P(FastVsReference, WithinOneCodeAndRarelyOff) {
+  const auto [mode, curve] = GetParam();
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<double> lg(-5, 3.5);  // 1e-5 .. 3000 x paper white
+  Image img(256, 64);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    for (int c = 0; c < 3; ++c) img.rgba[i * 4 + c] = static_cast<float>(std::pow(10.0, lg(rng)));
+    img.rgba[i * 4 + 3] = 1;
+  }
+  auto s = settings(mode, curve);
+  SceneInput in;
+  in.image = &img;
+  auto prepared = prepare_pipeline(in, s);
+  ASSERT_TRUE(prepared.ok());
+  auto f = encode_prepared(in, *prepared);
+  ASSERT_TRUE(f.ok());
+  const auto sig = detail::build_signal_stage(s.target);
+  int worst = 0, off = 0, total = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float* p = img.px(x, y);
+      const Vec3 e = reference_signal(s.target, reference_display_nits(*prepared, {p[0], p[1], p[2]}));
+      const auto got = codes_at(*f, x, y);
+      for (int c = 0; c < 3; ++c) {
+        const int want = static_cast<int>(std::clamp(e[c], 0.0, 1.0) * sig.code_scale + 0.5);
+        const int d = std::abs(got[c] - want);
+        worst = std::max(worst, d);
+        off += d != 0;
+        ++total;
+      }
+    }
+  EXPECT_LE(worst, 1);
+  EXPECT_LT(off, total / 200) << off << " of " << total << " values off by one";
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, FastVsReference,
+                         ::testing::Values(Case{Mode::hdr10, "clip"}, Case{Mode::hdr10, "pq-shoulder"},
+                                           Case{Mode::hdr10, "hable"}, Case{Mode::hdr10, "reinhard"},
+                                           Case{Mode::hdr10, "ictcp"}, Case{Mode::hdr10, "agx"},
+                                           Case{Mode::hlg, "pq-shoulder"}, Case{Mode::sdr, "pq-shoulder"},
+                                           Case{Mode::sdr, "aces-narkowicz"}, Case{Mode::sdr_bt1886, "pq-shoulder"}),
+                         [](const auto& i) {
+                           std::string n = std::string(to_string(i.param.mode)) + "_" + i.param.curve;
+                           for (char& c : n)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return n;
+                         });
+
+TEST(Encode, UiWhiteLandsAtUiWhiteNits) {
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 2;
+  overlay->height = 1;
+  overlay->rgba = {1, 1, 1, 1, 1, 1, 1, 0.5f};  // opaque white, half-transparent white
+  auto s = settings(Mode::hdr10);
+  s.ui.overlay = overlay;
+  s.target.ui_white_nits = 400;
+  auto f = encode(solid(2, 1, {0, 0, 0}), s);
+  EXPECT_EQ(codes_at(f, 0, 0)[0], 668);  // 400 cd/m2 (REFERENCE.md §2)
+  // Half alpha over black, blended in linear light: 200 cd/m2.
+  EXPECT_EQ(codes_at(f, 1, 0)[0], std::lround(transfer::pq_inverse_eotf(200) * 1023));
+}
+
+TEST(Encode, InvalidSettingsAreErrors) {
+  const Image img = solid(1, 1, {1, 1, 1});
+  auto s = settings(Mode::hdr10, "nope");
+  SceneInput in;
+  in.image = &img;
+  auto r = encode_frame(in, s);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().field, "tone.curve");
+  s = settings(Mode::hdr10);
+  s.target.peak_nits = -5;
+  EXPECT_EQ(encode_frame(in, s).error().field, "display.peak_nits");
+  s = settings(Mode::hdr10, "agx");
+  s.tone.apply = tonemap::Apply::luminance;
+  EXPECT_EQ(encode_frame(in, s).error().field, "tone.apply");
+}
+
+}  // namespace
