@@ -35,6 +35,10 @@ struct GpuLut {
   std::vector<float> rgb;  // size^3 * 3
   Shaper shaper = Shaper::pq;
   double shaper_min = 0, shaper_max = 1;  // shaper domain parameters (e.g. log2 stops)
+  // Interpolation the CPU path uses (tetrahedral unless set). LUT output is decoded with the
+  // inverse shaper for scene placement and as PQ of display nits for display and baked
+  // (docs/grading.md has the shaper formulas).
+  bool trilinear = false;
 };
 
 class Grade {
