@@ -28,7 +28,8 @@
 #include <OpenEXR/ImfStdIO.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
-#include <Iex.h>
+#include <OpenEXR/Iex.h>
+#include <Imath/half.h>
 
 #include "encode/io.hpp"
 
@@ -378,6 +379,8 @@ Result<ExrImage> read_guarded(Imf::IStream& stream, const std::string& name) {
     return exr_error(name, "exr.corrupt", "out of memory while decoding (corrupt sizes?)");
   } catch (const std::exception& e) {
     const std::string what = e.what();
+    if (contains_nocase(what, "exceeds the maximum"))  // Header::setMaxImageSize, see exr_threads()
+      return exr_error(name, "exr.size", fmt::format("image too large ({})", what));
     const bool truncated = contains_nocase(what, "end of file") || contains_nocase(what, "premature");
     return exr_error(name, truncated ? "exr.truncated" : "exr.corrupt",
                      fmt::format("{} ({})", truncated ? "truncated file" : "corrupt file", what));
@@ -476,12 +479,18 @@ Result<std::vector<std::uint8_t>> encode_exr(const Image& image, const ExrWriteO
     Imf::StdOSStream stream;
     {
       Imf::OutputFile out(stream, header, exr_threads());
-      char* base = const_cast<char*>(reinterpret_cast<const char*>(image.rgba.data()));
-      const std::size_t xs = 4 * sizeof(float), ys = xs * static_cast<std::size_t>(image.width);
+      // OpenEXR does not convert float to half on output: round here (nearest even,
+      // Imath::half's conversion, overflow to +-Inf).
+      std::vector<half> halves;
+      if (options.half) halves.assign(image.rgba.begin(), image.rgba.end());
+      const std::size_t bytes = options.half ? sizeof(half) : sizeof(float);
+      char* base = options.half ? reinterpret_cast<char*>(halves.data())
+                                : const_cast<char*>(reinterpret_cast<const char*>(image.rgba.data()));
+      const std::size_t xs = 4 * bytes, ys = xs * static_cast<std::size_t>(image.width);
       Imf::FrameBuffer fb;
       const char* names[4] = {"R", "G", "B", "A"};
       for (int c = 0; c < (alpha ? 4 : 3); ++c)
-        fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+        fb.insert(names[c], Imf::Slice(options.half ? Imf::HALF : Imf::FLOAT, base + c * bytes, xs, ys));
       out.setFrameBuffer(fb);
       out.writePixels(image.height);
     }  // the destructor writes the offset table

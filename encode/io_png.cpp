@@ -22,6 +22,7 @@ namespace {
 
 struct PngErrorState {
   std::string message;
+  std::string warnings;  // libpng explains some errors in a warning first ("... exceeds user limit")
   bool truncated = false;
   bool out_of_memory = false;
 };
@@ -32,7 +33,11 @@ struct PngErrorState {
   png_longjmp(png, 1);
 }
 
-void on_png_warning(png_structp, png_const_charp) {}  // benign oddities (bad ancillary CRC, ...)
+// Benign oddities (a bad ancillary CRC, ...) are not errors; kept to explain an error.
+void on_png_warning(png_structp png, png_const_charp message) {
+  auto* state = static_cast<PngErrorState*>(png_get_error_ptr(png));
+  if (state && message && state->warnings.size() < 512) state->warnings.append(message).append("; ");
+}
 
 // ---- chunk payloads (PNG 3rd edition §11.3.2.6-8, all big-endian) ----------------------
 
@@ -321,9 +326,10 @@ bool read_pixels(png_structp png, png_infop info, PngReadJob& job) {
 
 Error png_read_error(const std::string& name, const PngErrorState& e) {
   if (e.truncated) return make_error("png.truncated", fmt::format("cannot read PNG {}: truncated file", name));
-  if (e.message.find("exceeds user limit") != std::string::npos)
-    return make_error("png.size", fmt::format("cannot read PNG {}: {} (limit {} pixels per side)", name,
-                                              e.message, kMaxImageDimension));
+  if (e.message.find("exceeds user limit") != std::string::npos ||
+      e.warnings.find("exceeds user limit") != std::string::npos)
+    return make_error("png.size", fmt::format("cannot read PNG {}: image larger than {} pixels per side", name,
+                                              kMaxImageDimension));
   return make_error("png.corrupt", fmt::format("cannot read PNG {}: corrupt file ({})", name,
                                                e.message.empty() ? "libpng failed" : e.message));
 }
