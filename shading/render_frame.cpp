@@ -1,0 +1,388 @@
+// One frame: camera and light set-up, shadow pass, lit pass (MSAA), tone-map-aware
+// resolve, float readback.
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include "shading/renderer_impl.hpp"
+#include "shading/shaders.hpp"
+
+namespace hdrd::shading {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+gpu::mat4 to_gpu(const Mat4& m) {
+  gpu::mat4 r{};
+  for (int i = 0; i < 16; ++i) r[i] = static_cast<float>(m.m[i]);
+  return r;
+}
+gpu::vec4 to_gpu(Vec3 v, double w) { return {float(v.x), float(v.y), float(v.z), float(w)}; }
+
+constexpr float kHalfMax = 65504.0f;
+
+Camera resolve_camera(const Scene& s, const RenderSettings& settings) {
+  const double aspect = double(settings.width) / settings.height;
+  Camera c = s.camera ? *s.camera : default_camera(s, aspect);
+  if (settings.camera) {
+    if (settings.camera->position) c.position = *settings.camera->position;
+    if (settings.camera->target) c.target = *settings.camera->target;
+    if (settings.camera->yfov_deg) c.yfov_rad = *settings.camera->yfov_deg * kPi / 180.0;
+  }
+  return c;
+}
+
+// Near/far planes around the scene bounds unless the camera fixes them.
+std::pair<double, double> depth_range(const Camera& c, const Bounds& b) {
+  if (c.znear_m > 0 && c.zfar_m > c.znear_m) return {c.znear_m, c.zfar_m};
+  const double dist = length(b.center() - c.position), radius = std::max(b.radius(), 1e-3);
+  const double zfar = c.zfar_m > 0 ? c.zfar_m : (dist + radius) * 1.01 + 1e-3;
+  const double znear = c.znear_m > 0 ? c.znear_m : std::max(zfar * 1e-4, (dist - radius) * 0.99);
+  return {znear, zfar};
+}
+
+// The brightest directional light that casts shadows, or -1.
+int shadow_light(const Scene& s) {
+  int best = -1;
+  double best_e = 0;
+  for (std::size_t i = 0; i < s.lights.size(); ++i) {
+    const Light& l = s.lights[i];
+    const double e = l.illuminance_lux * luminance(l.color);
+    if (l.type == LightType::directional && l.cast_shadows && e > best_e) {
+      best = static_cast<int>(i);
+      best_e = e;
+    }
+  }
+  return best;
+}
+
+Mat4 light_clip_matrix(const Light& l, const Bounds& b) {
+  const Vec3 dir = normalize(l.direction), c = b.center();
+  const double r = std::max(b.radius(), 1e-3);
+  const Vec3 up = std::abs(dir.y) > 0.99 ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
+  return orthographic(-r, r, -r, r, 0.5 * r, 3.5 * r) * look_at(c - dir * (2 * r), c, up);
+}
+
+gpu::LightBlock light_block(const Scene& s, int shadow_index) {
+  gpu::LightBlock block{};
+  for (std::size_t i = 0; i < s.lights.size(); ++i) {
+    const Light& l = s.lights[i];
+    gpu::LightEntry& e = block.lights[i];
+    const double amount = l.type == LightType::directional ? l.illuminance_lux : l.intensity_cd;
+    const int type = l.type == LightType::directional ? 0 : l.type == LightType::point ? 1 : 2;
+    e.color_intensity = to_gpu(l.color * amount, 0);
+    e.position_type = to_gpu(l.position, type);
+    e.direction_range = to_gpu(normalize(l.direction), l.range_m);
+    // glTF KHR_lights_punctual's smooth cone falloff as scale/offset on cos(angle).
+    const double cos_outer = std::cos(l.outer_cone_rad), cos_inner = std::cos(l.inner_cone_rad);
+    const double scale = 1.0 / std::max(1e-3, cos_inner - cos_outer);
+    e.spot = {float(scale), float(-cos_outer * scale), static_cast<int>(i) == shadow_index ? 1.0f : 0.0f, 0};
+  }
+  return block;
+}
+
+Result<void> ensure_targets(Renderer::Impl& r, const RenderSettings& s, int samples) {
+  Targets& t = r.targets;
+  if (t.width == s.width && t.height == s.height && t.samples == samples && t.format == s.target && t.fbo) return {};
+  const GlApi& gl = *r.gl;
+  t = Targets{};
+  r.has_frame = false;
+  const GLenum color_format = s.target == TargetFormat::rgba16f ? GL_RGBA16F : GL_RGBA32F;
+  t.color = gen_texture(gl);
+  gl.BindTexture(GL_TEXTURE_2D, t.color.id());
+  gl.TexStorage2D(GL_TEXTURE_2D, 1, color_format, s.width, s.height);
+  set_sampling(gl, GL_TEXTURE_2D, GL_NEAREST, GL_NEAREST, GL_CLAMP_TO_EDGE);
+  t.depth = gen_renderbuffer(gl);
+  gl.BindRenderbuffer(GL_RENDERBUFFER, t.depth.id());
+  gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, 0, GL_DEPTH_COMPONENT32F, s.width, s.height);
+  t.fbo = gen_framebuffer(gl);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
+  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.color.id(), 0);
+  gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.depth.id());
+  if (auto e = check_gl(gl, fmt::format("allocating a {}x{} render target", s.width, s.height)); !e) return e;
+  if (auto e = check_framebuffer(gl, "render target"); !e) return e;
+  if (samples > 1) {
+    t.msaa_color = gen_texture(gl);
+    gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, t.msaa_color.id());
+    gl.TexStorage2DMultisample(GL_TEXTURE_2D_MULTISAMPLE, samples, color_format, s.width, s.height, GL_TRUE);
+    t.msaa_depth = gen_renderbuffer(gl);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, t.msaa_depth.id());
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT32F, s.width, s.height);
+    t.msaa_fbo = gen_framebuffer(gl);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, t.msaa_fbo.id());
+    gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D_MULTISAMPLE, t.msaa_color.id(), 0);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.msaa_depth.id());
+    if (auto e = check_gl(gl, fmt::format("allocating a {}x{} {}x MSAA target", s.width, s.height, samples)); !e)
+      return e;
+    if (auto e = check_framebuffer(gl, "MSAA render target"); !e) return e;
+  }
+  t.width = s.width;
+  t.height = s.height;
+  t.samples = samples;
+  t.format = s.target;
+  return {};
+}
+
+Result<void> ensure_shadow_map(Renderer::Impl& r, int size) {
+  if (r.shadow_size == size && r.shadow_fbo) return {};
+  const GlApi& gl = *r.gl;
+  r.shadow_map = gen_texture(gl);
+  gl.BindTexture(GL_TEXTURE_2D, r.shadow_map.id());
+  gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, size, size);
+  set_sampling(gl, GL_TEXTURE_2D, GL_LINEAR, GL_LINEAR, GL_CLAMP_TO_EDGE);  // 2x2 PCF in hardware
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  r.shadow_fbo = gen_framebuffer(gl);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.shadow_fbo.id());
+  gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, r.shadow_map.id(), 0);
+  const GLenum none = GL_NONE;
+  gl.DrawBuffers(1, &none);
+  gl.ReadBuffer(GL_NONE);
+  if (auto e = check_framebuffer(gl, "shadow map"); !e) return e;
+  r.shadow_size = size;
+  return check_gl(gl, "allocating the shadow map");
+}
+
+void shadow_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s) {
+  const GlApi& gl = *r.gl;
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.shadow_fbo.id());
+  gl.Viewport(0, 0, r.shadow_size, r.shadow_size);
+  const float one = 1.0f;
+  gl.ClearBufferfv(GL_DEPTH, 0, &one);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.DepthMask(GL_TRUE);
+  gl.Enable(GL_POLYGON_OFFSET_FILL);
+  gl.PolygonOffset(2.0f, 4.0f);  // slope-scaled bias against acne
+  gl.UseProgram(r.shadow_program.id());
+  for (std::size_t i = 0; i < s.instances.size(); ++i)
+    if (s.materials[s.instances[i].material].alpha_mode != AlphaMode::blend) draw_instance(r, g, s, i, true);
+  gl.Disable(GL_POLYGON_OFFSET_FILL);
+}
+
+void lit_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s, const Camera& cam, Vec3 background) {
+  const GlApi& gl = *r.gl;
+  const Targets& t = r.targets;
+  gl.BindFramebuffer(GL_FRAMEBUFFER, t.samples > 1 ? t.msaa_fbo.id() : t.fbo.id());
+  gl.Viewport(0, 0, t.width, t.height);
+  const float clear[4] = {float(background.x), float(background.y), float(background.z), 1.0f};
+  const float one = 1.0f;
+  gl.ClearBufferfv(GL_COLOR, 0, clear);
+  gl.ClearBufferfv(GL_DEPTH, 0, &one);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LESS);
+  gl.DepthMask(GL_TRUE);
+  gl.Disable(GL_BLEND);
+  gl.UseProgram(r.lit_program.id());
+  gl.ActiveTexture(GL_TEXTURE0 + gpu::kUnitShadow);
+  gl.BindTexture(GL_TEXTURE_2D, r.shadow_map ? r.shadow_map.id() : 0);
+  gl.ActiveTexture(GL_TEXTURE0 + gpu::kUnitAmbientLut);
+  gl.BindTexture(GL_TEXTURE_2D, r.ambient_lut.id());
+  std::vector<std::pair<double, std::size_t>> blended;
+  for (std::size_t i = 0; i < s.instances.size(); ++i) {
+    if (s.materials[s.instances[i].material].alpha_mode == AlphaMode::blend) {
+      const Vec3 c = s.instances[i].transform.transform_point({0, 0, 0});
+      blended.push_back({-length(c - cam.position), i});
+      continue;
+    }
+    draw_instance(r, g, s, i, false);
+  }
+  if (blended.empty()) return;
+  std::sort(blended.begin(), blended.end());  // far to near
+  gl.Enable(GL_BLEND);
+  gl.BlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE);
+  gl.DepthMask(GL_FALSE);
+  for (const auto& b : blended) draw_instance(r, g, s, b.second, false);
+  gl.DepthMask(GL_TRUE);
+  gl.Disable(GL_BLEND);
+}
+
+void resolve_pass(Renderer::Impl& r, double weight_exposure) {
+  const GlApi& gl = *r.gl;
+  const Targets& t = r.targets;
+  gl.BindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
+  gl.Viewport(0, 0, t.width, t.height);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.Disable(GL_CULL_FACE);
+  gl.Disable(GL_BLEND);
+  gl.UseProgram(r.resolve_program.id());
+  gl.Uniform1i(r.resolve_samples_loc, t.samples);
+  gl.Uniform1f(r.resolve_exposure_loc, static_cast<float>(weight_exposure));
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, t.msaa_color.id());
+  gl.BindVertexArray(r.empty_vao.id());
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+// Reads the single-sample target as float (GL rows are bottom-up), undoing pre-exposure.
+Image read_frame(Renderer::Impl& r, double pre_exposure) {
+  const GlApi& gl = *r.gl;
+  const Targets& t = r.targets;
+  Image img(t.width, t.height);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
+  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl.ReadPixels(0, 0, t.width, t.height, GL_RGBA, GL_FLOAT, img.rgba.data());
+  const std::size_t row = static_cast<std::size_t>(t.width) * 4;
+  std::vector<float> tmp(row);
+  for (int y = 0; y < t.height / 2; ++y) {
+    float* a = img.rgba.data() + static_cast<std::size_t>(y) * row;
+    float* b = img.rgba.data() + static_cast<std::size_t>(t.height - 1 - y) * row;
+    std::memcpy(tmp.data(), a, row * sizeof(float));
+    std::memcpy(a, b, row * sizeof(float));
+    std::memcpy(b, tmp.data(), row * sizeof(float));
+  }
+  const float inv = static_cast<float>(1.0 / pre_exposure);
+  for (std::size_t i = 0; i < img.rgba.size(); i += 4) {
+    img.rgba[i] *= inv;
+    img.rgba[i + 1] *= inv;
+    img.rgba[i + 2] *= inv;
+    img.rgba[i + 3] = 1.0f;
+  }
+  return img;
+}
+
+Result<void> check_settings(const RenderSettings& s) {
+  if (auto r = check_image_size(s.width, s.height); !r)
+    return make_error(r.error().code, r.error().message, "width");
+  if (s.samples < 1 || s.samples > kMaxSamples)
+    return make_error("render.samples", fmt::format("samples {} is not in [1, {}]", s.samples, kMaxSamples),
+                      "samples");
+  if (s.shadow_map_size < 256 || s.shadow_map_size > 8192)
+    return make_error("render.shadow_map", "shadow map size must be in [256, 8192]", "shadow_map_size");
+  return {};
+}
+
+int pick_samples(const GlApi& gl, const RenderSettings& s, std::vector<std::string>& warnings) {
+  if (s.samples <= 1) return 1;
+  const auto counts = supported_sample_counts(gl, s.target == TargetFormat::rgba16f ? GL_RGBA16F : GL_RGBA32F);
+  int pick = 1;
+  for (int c : counts)
+    if (c >= s.samples) { pick = c; break; }
+  if (pick == 1 && !counts.empty()) pick = counts.back();
+  if (pick != s.samples)
+    warnings.push_back(fmt::format("{} MSAA samples requested; the driver offers {}, using {}", s.samples,
+                                   counts.empty() ? std::string("none") : fmt::format("{}", fmt::join(counts, "/")),
+                                   pick));
+  return pick;
+}
+
+// Light-based exposure of "a white card = 1" (REFERENCE.md §1.2: scale = pi / E).
+double white_card_scale(double dominant_lux) { return dominant_lux > 0 ? kPi / dominant_lux : 0.01; }
+
+}  // namespace
+
+Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& settings) {
+  if (auto r = check_settings(settings); !r) return r.error();
+  if (auto r = validate(scene); !r) return r.error();
+  RenderResult out;
+  out.scene_name = scene.name;
+  out.warnings = scene.warnings;
+  out.backend = context_->backend_name();
+  out.gl_renderer = context_->gl_renderer();
+  out.gl_version = context_->gl_version();
+  out.camera = resolve_camera(scene, settings);
+  if (auto r = validate_camera(out.camera); !r) return r.error();
+  scene.camera = out.camera;
+  out.dominant_illuminance_lux = dominant_illuminance_lux(scene, out.camera);
+  for (const auto& inst : scene.instances) out.triangles += scene.meshes[inst.mesh].indices.size() / 3;
+  if (scene.ambient_nits)
+    for (const Material& m : scene.materials)
+      if (m.fresnel_exponent != 5.0) {
+        out.warnings.push_back("the ambient term assumes the Schlick exponent 5 (materials with another "
+                               "fresnel_power get exponent-5 ambient reflection)");
+        break;
+      }
+
+  const Bounds bounds = world_bounds(scene);
+  const auto [znear, zfar] = depth_range(out.camera, bounds);
+  const double aspect = double(settings.width) / settings.height;
+  const int shadow_index = bounds.empty ? -1 : shadow_light(scene);
+  const double pre_exposure = settings.target == TargetFormat::rgba16f ? white_card_scale(out.dominant_illuminance_lux) : 1.0;
+
+  gpu::FrameBlock frame{};
+  frame.view_proj = to_gpu(perspective(out.camera.yfov_rad, aspect, znear, zfar) *
+                           look_at(out.camera.position, out.camera.target, out.camera.up));
+  const double shadow_texel = 2 * std::max(bounds.radius(), 1e-3) / settings.shadow_map_size;
+  if (shadow_index >= 0) frame.light_clip = to_gpu(light_clip_matrix(scene.lights[shadow_index], bounds));
+  frame.camera_pos = to_gpu(out.camera.position, 1);
+  frame.ambient_nits = to_gpu(scene.ambient_nits.value_or(Vec3{}), scene.ambient_nits ? 1 : 0);
+  frame.params = {float(pre_exposure), float(scene.medium_ior), float(scene.lights.size()), shadow_index >= 0 ? 1.0f : 0.0f};
+  frame.shadow_params = {float(1.5 * shadow_texel), 1.0f / settings.shadow_map_size,
+                         settings.target == TargetFormat::rgba16f ? kHalfMax : 3.0e38f, 0};
+  const Vec3 background = scene.background_nits.value_or(scene.ambient_nits.value_or(Vec3{})) * pre_exposure;
+
+  CurrentContext current(*context_);
+  if (!current.status()) return current.status().error();
+  Impl& r = *impl_;
+  const GlApi& gl = *r.gl;
+  gl.GetError();
+  const int samples = pick_samples(gl, settings, out.warnings);
+  out.samples = samples;
+  if (auto e = ensure_targets(r, settings, samples); !e) {
+    r.targets = Targets{};
+    return e.error();
+  }
+  if (shadow_index >= 0)
+    if (auto e = ensure_shadow_map(r, settings.shadow_map_size); !e) return e.error();
+
+  const auto t0 = Clock::now();
+  auto g = upload_scene(r, scene, frame, light_block(scene, shadow_index));
+  if (!g) return g.error();
+  if (shadow_index >= 0) shadow_pass(r, *g, scene);
+  lit_pass(r, *g, scene, out.camera, background);
+  if (samples > 1) resolve_pass(r, white_card_scale(out.dominant_illuminance_lux) / pre_exposure);
+  gl.Finish();
+  out.render_ms = ms_since(t0);
+  if (auto e = check_gl(gl, "rendering"); !e) return e.error();
+
+  const auto t1 = Clock::now();
+  out.scene_nits = read_frame(r, pre_exposure);
+  out.readback_ms = ms_since(t1);
+  if (auto e = check_gl(gl, "reading the frame back"); !e) return e.error();
+  r.has_frame = true;
+  r.last_pre_exposure = pre_exposure;
+  gl.BindVertexArray(0);
+  gl.UseProgram(0);
+  return out;
+}
+
+namespace {
+bool backend_matches(Backend want, const std::string& have) {
+  switch (want) {
+    case Backend::automatic: return true;
+    case Backend::egl: return have.rfind("egl", 0) == 0;
+    case Backend::egl_device: return have == "egl-device";
+    case Backend::egl_surfaceless: return have == "egl-surfaceless";
+    case Backend::osmesa: return have == "osmesa";
+  }
+  return false;
+}
+}  // namespace
+
+Result<RenderResult> Renderer::render(const RenderRequest& request) {
+  if (!backend_matches(request.backend, backend_name()))
+    return make_error("render.backend",
+                      fmt::format("this renderer runs on {}, the request asks for {}", backend_name(),
+                                  to_string(request.backend)),
+                      "backend");
+  RenderSettings settings;
+  settings.width = request.width;
+  settings.height = request.height;
+  settings.samples = request.samples;
+  settings.camera = request.camera;
+  settings.target = request.target;
+  if (auto r = check_settings(settings); !r) return r.error();  // before any loading work
+  auto scene = request.scene_json ? parse_scene_json(*request.scene_json, request.load)
+                                  : load_scene(request.scene.empty() ? default_scene_name() : request.scene,
+                                               request.load);
+  if (!scene) return scene.error();
+  return render(std::move(*scene), settings);
+}
+
+}  // namespace hdrd::shading

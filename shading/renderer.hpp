@@ -1,0 +1,103 @@
+// The offscreen renderer: one GL context per Renderer, used from one thread at a time
+// (the daemon keeps one per worker). render() loads a scene (built-in name, file, or a
+// JSON document), shades it physically and returns the scene-referred frame: linear
+// Rec.709 primaries, absolute cd/m2, float32, rows top-down.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "encode/image.hpp"
+#include "encode/result.hpp"
+#include "shading/gl_context.hpp"
+#include "shading/scene.hpp"
+#include "shading/scene_loader.hpp"
+
+namespace hdrd::shading {
+
+struct CameraOverride {
+  std::optional<Vec3> position;
+  std::optional<Vec3> target;
+  std::optional<double> yfov_deg;
+};
+// "px,py,pz[:tx,ty,tz[:fov_deg]]", e.g. "0,1.5,6:0,0.5,0:40".
+Result<CameraOverride> parse_camera_override(std::string_view text);
+
+// RGBA32F keeps absolute cd/m2 exactly; RGBA16F renders pre-exposed (white card = 1)
+// and clamps at 65504 times that.
+enum class TargetFormat { rgba32f, rgba16f };
+
+inline constexpr int kMaxSamples = 16;
+
+struct RenderSettings {
+  int width = 1280;
+  int height = 720;
+  int samples = 4;  // MSAA; 1 = off. Clamped to what the driver offers (warning).
+  std::optional<CameraOverride> camera;
+  TargetFormat target = TargetFormat::rgba32f;
+  int shadow_map_size = 2048;
+};
+
+struct RenderRequest {
+  std::string scene;  // built-in name or a .gltf/.glb/.json path; empty: scene_json, else the default scene
+  std::optional<nlohmann::json> scene_json;
+  int width = 1280;
+  int height = 720;
+  int samples = 4;
+  std::optional<CameraOverride> camera;
+  Backend backend = Backend::automatic;  // for Renderer::create; render() checks it matches
+  TargetFormat target = TargetFormat::rgba32f;
+  SceneLoadOptions load;
+};
+
+struct RenderResult {
+  Image scene_nits;  // linear Rec.709, cd/m2, RGBA float32 (A = 1), rows top-down
+  std::string scene_name;
+  std::string backend;      // "egl-device", "egl-surfaceless", "osmesa"
+  std::string gl_renderer;  // GL_RENDERER
+  std::string gl_version;   // GL_VERSION
+  int samples = 1;          // MSAA samples used
+  double render_ms = 0;     // GPU work (shadow + main pass + resolve), glFinish-bounded
+  double readback_ms = 0;
+  double dominant_illuminance_lux = 0;  // for light-based exposure (pi / E); 0 if none
+  Camera camera;                         // the camera used
+  std::int64_t triangles = 0;
+  std::vector<std::string> warnings;
+};
+
+class Renderer {
+ public:
+  static Result<std::unique_ptr<Renderer>> create(Backend backend = Backend::automatic);
+  static Result<std::unique_ptr<Renderer>> create(const ContextOptions& options);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Loads the request's scene and renders it.
+  Result<RenderResult> render(const RenderRequest& request);
+  // Renders an already built scene (validated and possibly modified: degenerate
+  // triangles dropped, missing normals computed).
+  Result<RenderResult> render(Scene scene, const RenderSettings& settings);
+
+  const GlContext& context() const { return *context_; }
+  std::string backend_name() const { return context_->backend_name(); }
+
+  struct Impl;
+  // The last rendered frame stays on the GPU for post passes (gpu_pass.hpp).
+  Impl& impl() { return *impl_; }
+
+ private:
+  Renderer(std::unique_ptr<GlContext> c, std::unique_ptr<Impl> impl);
+  std::unique_ptr<GlContext> context_;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Dynamic range of a frame in stops: log2 of the ratio of the luminance at the
+// `high` and `low` quantiles of the pixels with non-zero luminance.
+double dynamic_range_stops(const Image& frame, double low = 0.001, double high = 0.999);
+
+}  // namespace hdrd::shading
