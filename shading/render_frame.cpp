@@ -336,7 +336,9 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   if (!g) return g.error();
   if (shadow_index >= 0) shadow_pass(r, *g, scene);
   lit_pass(r, *g, scene, out.camera, background);
-  if (samples > 1) resolve_pass(r, white_card_scale(out.dominant_illuminance_lux) / pre_exposure);
+  if (samples > 1)
+    resolve_pass(r, settings.resolve == MsaaResolve::box ? 0.0
+                                                         : white_card_scale(out.dominant_illuminance_lux) / pre_exposure);
   gl.Finish();
   out.render_ms = ms_since(t0);
   if (auto e = check_gl(gl, "rendering"); !e) return e.error();

@@ -33,12 +33,19 @@ enum class TargetFormat { rgba32f, rgba16f };
 
 inline constexpr int kMaxSamples = 16;
 
+// How MSAA samples become a pixel. tonemap_weighted (default): weights 1 / (1 + L), with
+// L the sample's luminance in "white card = 1" units (pi / E of the dominant light), so
+// the result is the inverse Reinhard of the mean Reinhard-mapped sample (RTR4 §5.4.2,
+// Karis 2014) and edges survive tone mapping. box: plain average (for comparison).
+enum class MsaaResolve { tonemap_weighted, box };
+
 struct RenderSettings {
   int width = 1280;
   int height = 720;
   int samples = 4;  // MSAA; 1 = off. Clamped to what the driver offers (warning).
   std::optional<CameraOverride> camera;
   TargetFormat target = TargetFormat::rgba32f;
+  MsaaResolve resolve = MsaaResolve::tonemap_weighted;
   int shadow_map_size = 2048;
 };
 
