@@ -6,9 +6,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <optional>
 #include <thread>
 #include <vector>
 
+#include "encode/fast_fused.hpp"
 #include "encode/fast_kernels.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/pipeline_internal.hpp"
@@ -144,19 +147,19 @@ struct FrameJob {
   bool container_is_working = true;
   EncodedFrame* frame;
   int width = 0;
+  std::optional<kernels::FusedRow> fused;  // the fused SIMD kernel's template, when eligible
 };
 
-void stage_input(const FrameJob& job, int y, float* row) {
-  const std::size_t base = static_cast<std::size_t>(y) * job.width;
+void stage_input(const FrameJob& job, int y, int x0, int n, float* row) {
+  const std::size_t base = static_cast<std::size_t>(y) * job.width + x0;
   if (job.in->half)
-    kernels::half_rows_to_working(job.in->half->rgba.data() + base * 4, job.width, job.m_in.m, row);
+    kernels::half_rows_to_working(job.in->half->rgba.data() + base * 4, n, job.m_in.m, row);
   else
-    kernels::float_rows_to_working(job.in->image->rgba.data() + base * 4, job.width, job.m_in.m, row);
+    kernels::float_rows_to_working(job.in->image->rgba.data() + base * 4, n, job.m_in.m, row);
 }
 
-void stage_tone(const FrameJob& job, float* row) {
+void stage_tone(const FrameJob& job, int n, float* row) {
   const ToneStage& t = *job.tone;
-  const int n = job.width;
   switch (t.kind) {
     case ToneKind::clip:
       kernels::tone_clip(row, n, t.paper_white, t.peak);
@@ -166,7 +169,7 @@ void stage_tone(const FrameJob& job, float* row) {
         for (int c = 0; c < 3; ++c) row[i + c] = t.lut(row[i + c]);
       break;
     case ToneKind::ratio:
-      kernels::tone_ratio(row, n, t.lut, t.ratio_of_luminance);
+      kernels::tone_ratio(row, n, t.lut, t.ratio_of_luminance, job.container_is_working ? nullptr : job.to_c.m);
       break;
     case ToneKind::reference: {
       const auto& p = *job.p;
@@ -185,10 +188,9 @@ void stage_tone(const FrameJob& job, float* row) {
 
 // Working nits -> container nits, gamut-mapping what does not fit (rare: only those
 // pixels take the ICtCp reference path).
-void stage_container(const FrameJob& job, float* row) {
+void stage_container(const FrameJob& job, int n, float* row) {
   const auto& t = job.p->settings.target;
-  const int n = job.width;
-  const float peak = static_cast<float>(t.peak_nits) * (1 + 1e-6f);
+  const float lo = detail::gamut_low(t), peak = detail::gamut_high(t);
   const bool map = t.mode != Mode::scrgb;
   for (int i = 0; i < n * 4; i += 4) {
     float r = row[i], g = row[i + 1], b = row[i + 2];
@@ -199,7 +201,7 @@ void stage_container(const FrameJob& job, float* row) {
       const float cb = m[6] * r + m[7] * g + m[8] * b;
       r = cr, g = cg, b = cb;
     }
-    if (map && !(r >= 0 && g >= 0 && b >= 0 && r <= peak && g <= peak && b <= peak)) {
+    if (map && !(r >= lo && g >= lo && b >= lo && r <= peak && g <= peak && b <= peak)) {
       const Vec3 c = detail::gamut_map({row[i], row[i + 1], row[i + 2]}, t, job.p->settings.gamut);
       r = static_cast<float>(c.x), g = static_cast<float>(c.y), b = static_cast<float>(c.z);
     }
@@ -207,14 +209,16 @@ void stage_container(const FrameJob& job, float* row) {
   }
 }
 
-void stage_encode(const FrameJob& job, int y, const float* row, ContentLightAccumulator& cll) {
+void stage_encode(const FrameJob& job, int y, int x0, int n, const float* row, ContentLightAccumulator& cll) {
   EncodedFrame& f = *job.frame;
   const SignalStage& s = *job.sig;
-  const int n = job.width;
   const bool dither = job.p->settings.dither;
   const float* bayer_row = kBayer8 + (y & 7) * 8;
-  std::uint8_t* out = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes;
-  std::uint16_t* s16 = f.signal16.empty() ? nullptr : f.signal16.data() + static_cast<std::size_t>(y) * n * 3;
+  const std::size_t bpp = f.drm_fourcc == kDrmFormatAbgr16161616f ? 8 : 4;
+  std::uint8_t* out = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes + x0 * bpp;
+  std::uint16_t* s16 = f.signal16.empty()
+                           ? nullptr
+                           : f.signal16.data() + (static_cast<std::size_t>(y) * job.width + x0) * 3;
   const bool narrow = s.code_offset != 0;
 
   if (s.mode == Mode::scrgb) {
@@ -249,7 +253,7 @@ void stage_encode(const FrameJob& job, int y, const float* row, ContentLightAccu
     } else {
       e = {s.signal(px[0]), s.signal(px[1]), s.signal(px[2])};
     }
-    const float bias = dither ? bayer_row[x & 7] * (1.0f / 64.0f) + (0.5f / 64.0f) : 0.5f;
+    const float bias = dither ? bayer_row[(x0 + x) & 7] * (1.0f / 64.0f) + (0.5f / 64.0f) : 0.5f;
     int code[3];
     for (int c = 0; c < 3; ++c) {
       const float v = std::clamp(e[c], 0.0f, 1.0f);
@@ -284,24 +288,99 @@ void stage_encode(const FrameJob& job, int y, const float* row, ContentLightAccu
   }
 }
 
-void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll) {
-  std::vector<float> row(static_cast<std::size_t>(job.width) * 4);
+// The staged path over pixels [x0, x0 + n) of row y (no UI: callers handle it).
+void run_staged(const FrameJob& job, int y, int x0, int n, float* row) {
   const auto* g = job.p->settings.grade.get();
   const auto placement = g ? g->placement() : grade::Placement::display;
+  stage_input(job, y, x0, n, row);
+  if (g && placement != grade::Placement::display) g->apply(row, static_cast<std::size_t>(n));
+  stage_tone(job, n, row);
+  if (g && placement == grade::Placement::display) g->apply(row, static_cast<std::size_t>(n));
+  stage_container(job, n, row);
+}
+
+bool ui_touches_row(const PreparedUi& ui, int y) {
+  return ui.active() && y + 1 > ui.y0 - ui.scale && y < ui.y0 + (ui.h + 1) * ui.scale;
+}
+
+void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll) {
+  const int w = job.width;
+  std::vector<float> row(static_cast<std::size_t>(w) * 4);
+  std::vector<int> fallback(static_cast<std::size_t>(w));
   for (int y = y_begin; y < y_end; ++y) {
-    stage_input(job, y, row.data());
-    if (g && placement != grade::Placement::display) g->apply(row.data(), job.width);
-    stage_tone(job, row.data());
-    if (g && placement == grade::Placement::display) g->apply(row.data(), job.width);
-    stage_container(job, row.data());
-    if (job.ui->active()) composite_ui_row(*job.ui, y, job.width, row.data());
+    if (job.fused && !ui_touches_row(*job.ui, y)) {
+      kernels::FusedRow fr = *job.fused;
+      const std::size_t base = static_cast<std::size_t>(y) * w;
+      if (job.in->half) fr.half_in = job.in->half->rgba.data() + base * 4;
+      else fr.float_in = job.in->image->rgba.data() + base * 4;
+      fr.n = w;
+      fr.out = job.frame->data.data() + static_cast<std::size_t>(y) * job.frame->stride_bytes;
+      fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
+      fr.fallback = fallback.data();
+      kernels::fused_row(fr);
+      cll.max_nits = std::max(cll.max_nits, fr.max_nits);
+      cll.sum_nits += fr.sum_nits;
+      // The tail, and pixels outside the display gamut, take the exact path.
+      if (fr.done < w) {
+        run_staged(job, y, fr.done, w - fr.done, row.data());
+        stage_encode(job, y, fr.done, w - fr.done, row.data(), cll);
+      }
+      for (int i = 0; i < fr.fallback_count; ++i) {
+        run_staged(job, y, fallback[i], 1, row.data());
+        stage_encode(job, y, fallback[i], 1, row.data(), cll);
+      }
+      continue;
+    }
+    run_staged(job, y, 0, w, row.data());
+    if (job.ui->active()) composite_ui_row(*job.ui, y, w, row.data());
     if (job.frame->display_nits)
       std::memcpy(job.frame->display_nits->px(0, y), row.data(), row.size() * sizeof(float));
-    stage_encode(job, y, row.data(), cll);
+    stage_encode(job, y, 0, w, row.data(), cll);
   }
 }
 
-void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool keep_nits) {
+// The fused kernel's parameters, when this frame can use it.
+std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
+  const auto& p = *job.p;
+  const auto& t = p.settings.target;
+  if (p.settings.grade || p.settings.dither || p.settings.keep_display_nits) return std::nullopt;
+  if (t.mode == Mode::hlg) return std::nullopt;
+  kernels::FusedRow r;
+  switch (job.tone->kind) {
+    case ToneKind::clip: r.tone = kernels::FusedTone::clip; break;
+    case ToneKind::per_channel: r.tone = kernels::FusedTone::per_channel; break;
+    case ToneKind::ratio:
+      r.tone = job.tone->ratio_of_luminance ? kernels::FusedTone::ratio_luminance : kernels::FusedTone::ratio_max;
+      break;
+    default: return std::nullopt;
+  }
+  auto view = [](const FloatBitsLut& l) {
+    return kernels::LutView{l.table().data(), l.base_bits(), l.lo(), l.hi(), std::nextafter(l.hi(), 0.0f)};
+  };
+  r.m_in = job.m_in.m;
+  r.paper_white = job.tone->paper_white;
+  r.peak = job.tone->peak;
+  if (job.tone->kind != ToneKind::clip) r.tone_lut = view(job.tone->lut);
+  r.m_container = job.container_is_working ? nullptr : job.to_c.m;
+  if (t.mode == Mode::scrgb) {
+    r.out_kind = kernels::FusedOut::scrgb;
+    r.gamut_lo = -std::numeric_limits<float>::infinity();
+    r.gamut_hi = std::numeric_limits<float>::infinity();
+    return r;
+  }
+  r.gamut_lo = detail::gamut_low(t);
+  r.gamut_hi = detail::gamut_high(t);
+  r.out_kind = job.frame->drm_fourcc == kDrmFormatXrgb8888 ? kernels::FusedOut::xrgb8 : kernels::FusedOut::packed10;
+  r.signal = view(job.sig->signal);
+  r.code_scale = job.sig->code_scale;
+  r.code_offset = job.sig->code_offset;
+  r.max_code = job.sig->max_code;
+  r.narrow = job.sig->code_offset != 0;
+  r.code_to_nits = t.mode == Mode::hdr10 ? job.sig->code_to_nits.data() : nullptr;
+  return r;
+}
+
+void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool keep_nits, bool png_samples) {
   f.target = t;
   f.width = w;
   f.height = h;
@@ -315,7 +394,7 @@ void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool kee
   } else {
     f.drm_fourcc = kDrmFormatXbgr2101010;
     f.stride_bytes = static_cast<std::size_t>(w) * 4;
-    f.signal16.resize(static_cast<std::size_t>(w) * h * 3);
+    if (png_samples) f.signal16.resize(static_cast<std::size_t>(w) * h * 3);
   }
   f.data.resize(f.stride_bytes * h);
   if (keep_nits) f.display_nits.emplace(w, h);
@@ -335,13 +414,14 @@ Result<EncodedFrame> encode_prepared(const SceneInput& in, const PreparedPipelin
   const PreparedUi ui = prepare_ui(p);
 
   EncodedFrame frame;
-  setup_frame(frame, t, w, h, p.settings.keep_display_nits);
+  setup_frame(frame, t, w, h, p.settings.keep_display_nits, p.settings.png_samples);
   FrameJob job{&in, &p, &tone, &sig, &ui};
   job.m_in = Mat3f(p.input_to_working * Mat3{{{{p.scene_scale, 0, 0}, {0, p.scene_scale, 0}, {0, 0, p.scene_scale}}}});
   job.to_c = Mat3f(detail::working_to_container(t));
   job.container_is_working = t.container() == color::kRec2020;
   job.frame = &frame;
   job.width = w;
+  job.fused = fused_template(job);
 
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hw, 1, std::max(1, h));

@@ -37,10 +37,12 @@ void tone_clip(float* row, int n, float paper_white, float peak) {
     for (int c = 0; c < 3; ++c) row[i + c] = std::min(std::max(row[i + c], 0.0f) * paper_white, peak);
 }
 
-void tone_ratio(float* row, int n, const FloatBitsLut& lut, bool luminance) {
+void tone_ratio(float* row, int n, const FloatBitsLut& lut, bool luminance, const float* m) {
   for (int i = 0; i < n * 4; i += 4) {
     const float r = std::max(row[i], 0.0f), g = std::max(row[i + 1], 0.0f), b = std::max(row[i + 2], 0.0f);
-    const float k = luminance ? 0.2627f * r + 0.6780f * g + 0.0593f * b : std::max({r, g, b});
+    float k = luminance ? 0.2627f * r + 0.6780f * g + 0.0593f * b : std::max({r, g, b});
+    if (!luminance && m)
+      k = std::max({k, m[0] * r + m[1] * g + m[2] * b, m[3] * r + m[4] * g + m[5] * b, m[6] * r + m[7] * g + m[8] * b});
     float ratio = 0;
     if (k > 0) ratio = k < lut.hi() ? lut(k) : lut(lut.hi()) * (lut.hi() / k);
     row[i] = r * ratio, row[i + 1] = g * ratio, row[i + 2] = b * ratio;

@@ -17,7 +17,9 @@ void float_rows_to_working(const float* in, int n, const float* m, float* out);
 // Negatives to 0, then nits = min(x * paper_white, peak) per channel.
 void tone_clip(float* row, int n, float paper_white, float peak);
 // Negatives to 0, then rgb *= lut(k) with k = max(r, g, b) or Rec.2020 luminance.
-void tone_ratio(float* row, int n, const FloatBitsLut& lut, bool luminance);
+// With `container` (row-major 3x3, or null) the max also covers the output container's
+// channels, so no output channel passes the peak.
+void tone_ratio(float* row, int n, const FloatBitsLut& lut, bool luminance, const float* container);
 
 // Fused HDR10 tail for rows already in container nits: PQ via the signal LUT, full or
 // narrow quantisation, XBGR2101010 packing, 16-bit PNG samples (may be null) and the

@@ -66,7 +66,7 @@ Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g) {
   Vec3 c = to_c * working_nits;
   if (t.mode == Mode::scrgb) return c;
   const double peak = t.peak_nits;
-  if (in_gamut(c, peak, 0)) return c;
+  if (in_gamut(c, peak, kGamutTolerance)) return clamp_to(c, peak);
   if (g == GamutMapping::clip) return clamp_to(c, peak);
   const Vec3 ictcp = color::rec2020_nits_to_ictcp(
       {std::max(working_nits.x, 0.0), std::max(working_nits.y, 0.0), std::max(working_nits.z, 0.0)});
@@ -321,7 +321,15 @@ Vec3 reference_display_nits(const PreparedPipeline& p, Vec3 input_rgb) {
   } else {
     if (g && g->placement() == grade::Placement::scene) w = apply_grade(w);
     w = {std::max(w.x, 0.0), std::max(w.y, 0.0), std::max(w.z, 0.0)};
-    nits = p.curve->map_rgb(w, p.apply) * t.paper_white_nits;
+    if (p.apply == tonemap::Apply::max_rgb) {
+      // max(RGB) over the working space and the output container, so that the ratio keeps
+      // every output channel at or below the peak (Rec.2020 max alone does not bound Rec.709).
+      const Vec3 c = detail::working_to_container(t) * w;
+      const double m = std::max({w.x, w.y, w.z, c.x, c.y, c.z});
+      nits = m > 0 ? w * (p.curve->map(m) / m * t.paper_white_nits) : Vec3{};
+    } else {
+      nits = p.curve->map_rgb(w, p.apply) * t.paper_white_nits;
+    }
     if (g && g->placement() == grade::Placement::display) nits = apply_grade(nits);
   }
   return detail::gamut_map(nits, t, p.settings.gamut);

@@ -43,6 +43,11 @@ SignalStage build_signal_stage(const DisplayTarget& t);
 color::Vec3 sanitize(color::Vec3 v);
 color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMapping g);
 color::Mat3 working_to_container(const DisplayTarget& t);
+// The container range accepted without gamut mapping: [-tol, peak (1 + tol)] with a
+// tolerance for float rounding of in-gamut colours (values inside are clamped).
+inline constexpr double kGamutTolerance = 1e-5;
+inline float gamut_low(const DisplayTarget& t) { return static_cast<float>(-kGamutTolerance * t.peak_nits); }
+inline float gamut_high(const DisplayTarget& t) { return static_cast<float>(t.peak_nits * (1 + kGamutTolerance)); }
 
 // Converts float <-> IEEE half (round to nearest even).
 std::uint16_t float_to_half(float f);

@@ -1,0 +1,214 @@
+// Encode benchmark (issue: encode core): 3840x2160 RGBA16F -> HDR10 / SDR / scRGB with
+// exposure + the mode's default tone curve + matrix + transfer + pack, at 1 and 2 threads,
+// beside (same run) the OpenColorIO 2.1 CPU processor doing matrix + transfer, and a
+// memory-bandwidth floor that reads and writes the same bytes. Counters report the code
+// error against the double-precision reference path.
+#include <benchmark/benchmark.h>
+
+#include <OpenColorIO/OpenColorIO.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "encode/pipeline.hpp"
+#include "encode/pipeline_internal.hpp"
+#include "encode/transfer.hpp"
+
+namespace OCIO = OCIO_NAMESPACE;
+using namespace hdrd;
+
+namespace {
+
+constexpr int kW = 3840, kH = 2160;
+
+// A deterministic scene-like frame: smooth gradients over ~14 stops plus noise,
+// Rec.709 relative values (1.0 = diffuse white), a few specular highlights.
+const ImageHalf& frame_half() {
+  static const ImageHalf img = [] {
+    ImageHalf h(kW, kH);
+    std::mt19937 rng(42);
+    std::normal_distribution<float> noise(0, 0.15f);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const float base = -9.0f + 14.0f * x / kW + 2.0f * std::sin(y * 0.01f);
+        const std::size_t i = (static_cast<std::size_t>(y) * kW + x) * 4;
+        const float c[3] = {std::exp2(base + noise(rng)), std::exp2(base - 0.5f + noise(rng)),
+                            std::exp2(base - 1.0f + noise(rng))};
+        for (int k = 0; k < 3; ++k) h.rgba[i + k] = detail::float_to_half(c[k]);
+        h.rgba[i + 3] = 0x3C00;
+      }
+    return h;
+  }();
+  return img;
+}
+
+EncodeSettings settings_for(Mode m, int threads) {
+  EncodeSettings s;
+  s.target = default_target(m);
+  s.threads = threads;
+  s.exposure.compensation_ev = 0.5;  // exercised, not trivial
+  s.png_samples = false;             // the scan-out buffer only (PNG samples are a dump option)
+  return s;
+}
+
+std::shared_ptr<const OverlayImage> ui_overlay() {
+  static auto o = [] {
+    auto ov = std::make_shared<OverlayImage>();
+    ov->width = 1200;
+    ov->height = 300;
+    ov->rgba.resize(static_cast<std::size_t>(ov->width) * ov->height * 4);
+    for (std::size_t i = 0; i < ov->rgba.size(); i += 4) {
+      ov->rgba[i] = 0.9f, ov->rgba[i + 1] = 0.9f, ov->rgba[i + 2] = 1.0f;
+      ov->rgba[i + 3] = (i / 4) % 7 == 0 ? 1.0f : 0.6f;
+    }
+    return ov;
+  }();
+  return o;
+}
+
+void run_hdrd(benchmark::State& st, Mode mode, bool ui) {
+  SceneInput in;
+  in.half = &frame_half();
+  auto s = settings_for(mode, static_cast<int>(st.range(0)));
+  if (ui) {
+    s.ui.overlay = ui_overlay();
+    s.ui.x = 100, s.ui.y = 1700;
+  }
+  for (auto _ : st) {
+    auto f = encode_frame(in, s);
+    if (!f) st.SkipWithError(f.error().message.c_str());
+    benchmark::DoNotOptimize(f->data.data());
+  }
+
+}
+
+void BM_hdrd_hdr10(benchmark::State& st) { run_hdrd(st, Mode::hdr10, false); }
+void BM_hdrd_hdr10_ui(benchmark::State& st) { run_hdrd(st, Mode::hdr10, true); }
+void BM_hdrd_sdr(benchmark::State& st) { run_hdrd(st, Mode::sdr, false); }
+void BM_hdrd_scrgb(benchmark::State& st) { run_hdrd(st, Mode::scrgb, false); }
+
+// Memory floor: read 8 B/px (half RGBA), write out_bytes per pixel, nothing else.
+void BM_floor(benchmark::State& st) {
+  const auto& in = frame_half();
+  const int out_bytes = static_cast<int>(st.range(0));
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(kW) * kH * out_bytes);
+  for (auto _ : st) {
+    const auto* src = reinterpret_cast<const std::uint64_t*>(in.rgba.data());
+    if (out_bytes == 4) {
+      auto* dst = reinterpret_cast<std::uint32_t*>(out.data());
+      for (std::size_t i = 0; i < in.pixel_count(); ++i) dst[i] = static_cast<std::uint32_t>(src[i] ^ (src[i] >> 32));
+    } else {
+      auto* dst = reinterpret_cast<std::uint64_t*>(out.data());
+      for (std::size_t i = 0; i < in.pixel_count(); ++i) dst[i] = src[i] ^ 0x1;
+    }
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+}
+
+// OpenColorIO 2.1 CPU processor on the same half input: matrix 709 -> 2020 and ST 2084
+// (HDR10), 709 -> XYZ -> sRGB display (SDR), a scale matrix (scRGB). OCIO's 1.0 = 100 cd/m2.
+OCIO::ConstCPUProcessorRcPtr ocio_processor(Mode mode) {
+  auto cfg = OCIO::Config::CreateRaw();
+  auto group = OCIO::GroupTransform::Create();
+  auto mat = [](const color::Mat3& m, double scale) {
+    auto t = OCIO::MatrixTransform::Create();
+    double m44[16] = {0};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m44[i * 4 + j] = m.m[i][j] * scale;
+    m44[15] = 1;
+    t->setMatrix(m44);
+    return t;
+  };
+  if (mode == Mode::hdr10) {
+    group->appendTransform(mat(color::rgb_to_rgb(color::kRec709, color::kRec2020), 2.03));
+    auto b = OCIO::BuiltinTransform::Create();
+    b->setStyle("CURVE - LINEAR_to_ST-2084");
+    group->appendTransform(b);
+  } else if (mode == Mode::sdr) {
+    group->appendTransform(mat(color::rgb_to_xyz(color::kRec709), 1.0));
+    auto b = OCIO::BuiltinTransform::Create();
+    b->setStyle("DISPLAY - CIE-XYZ-D65_to_sRGB");
+    group->appendTransform(b);
+  } else {
+    group->appendTransform(mat(color::Mat3::identity(), 203.0 / 80.0));
+  }
+  return cfg->getProcessor(group)->getOptimizedCPUProcessor(OCIO::BIT_DEPTH_F16, OCIO::BIT_DEPTH_F16,
+                                                            OCIO::OPTIMIZATION_DEFAULT);
+}
+
+void run_ocio(benchmark::State& st, Mode mode) {
+  auto proc = ocio_processor(mode);
+  ImageHalf work = frame_half();
+  for (auto _ : st) {
+    st.PauseTiming();
+    std::memcpy(work.rgba.data(), frame_half().rgba.data(), work.rgba.size() * 2);
+    st.ResumeTiming();
+    OCIO::PackedImageDesc desc(work.rgba.data(), kW, kH, OCIO::CHANNEL_ORDERING_RGBA, OCIO::BIT_DEPTH_F16,
+                               2, 8, static_cast<std::ptrdiff_t>(kW) * 8);
+    proc->apply(desc);
+    benchmark::DoNotOptimize(work.rgba.data());
+  }
+}
+void BM_ocio_hdr10(benchmark::State& st) { run_ocio(st, Mode::hdr10); }
+void BM_ocio_sdr(benchmark::State& st) { run_ocio(st, Mode::sdr); }
+void BM_ocio_scrgb(benchmark::State& st) { run_ocio(st, Mode::scrgb); }
+
+// Accuracy against the double-precision reference, on every 5th pixel of the frame.
+void accuracy(benchmark::State& st, Mode mode) {
+  SceneInput in;
+  in.half = &frame_half();
+  auto s = settings_for(mode, 2);
+  auto p = prepare_pipeline(in, s).value();
+  auto f = encode_prepared(in, p).value();
+  const auto sig = detail::build_signal_stage(s.target);
+  long worst = 0, off = 0, total = 0;
+  for (auto _ : st) {
+    for (std::size_t i = 0; i < in.half->pixel_count(); i += 5) {
+      const auto* h = &in.half->rgba[i * 4];
+      const color::Vec3 v{detail::half_to_float(h[0]), detail::half_to_float(h[1]), detail::half_to_float(h[2])};
+      const color::Vec3 e = reference_signal(s.target, reference_display_nits(p, v));
+      for (int c = 0; c < 3; ++c) {
+        long want, got;
+        if (mode == Mode::scrgb) {
+          // Compare in half ULPs of the FP16 output.
+          want = detail::float_to_half(static_cast<float>(e[c]));
+          got = reinterpret_cast<const std::uint16_t*>(f.data.data())[i * 4 + c];
+        } else if (f.drm_fourcc == kDrmFormatXrgb8888) {
+          want = static_cast<long>(std::clamp(e[c], 0.0, 1.0) * sig.code_scale + 0.5);
+          got = f.data[i * 4 + 2 - c];
+        } else {
+          want = static_cast<long>(std::clamp(e[c], 0.0, 1.0) * sig.code_scale + 0.5);
+          std::uint32_t w;
+          std::memcpy(&w, &f.data[i * 4], 4);
+          got = (w >> (10 * c)) & 1023;
+        }
+        worst = std::max(worst, std::labs(got - want));
+        off += got != want;
+        ++total;
+      }
+    }
+  }
+  st.counters["max_code_error"] = static_cast<double>(worst);
+  st.counters["pct_off_by_one"] = 100.0 * off / std::max(1L, total);
+}
+void BM_accuracy_hdr10(benchmark::State& st) { accuracy(st, Mode::hdr10); }
+void BM_accuracy_sdr(benchmark::State& st) { accuracy(st, Mode::sdr); }
+void BM_accuracy_scrgb(benchmark::State& st) { accuracy(st, Mode::scrgb); }
+
+}  // namespace
+
+BENCHMARK(BM_floor)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_hdrd_hdr10)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_hdrd_hdr10_ui)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_hdrd_sdr)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_hdrd_scrgb)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ocio_hdr10)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ocio_sdr)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ocio_scrgb)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_accuracy_hdr10)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_accuracy_sdr)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_accuracy_scrgb)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK_MAIN();

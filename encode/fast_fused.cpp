@@ -1,0 +1,186 @@
+// Highway dynamic dispatch: this file is compiled once per SIMD target.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "encode/fast_fused.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "encode/fast_fused.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace hdrd::kernels {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using DF = hn::ScalableTag<float>;
+using DU = hn::RebindToUnsigned<DF>;
+using DI = hn::RebindToSigned<DF>;
+using VF = hn::Vec<DF>;
+
+// FloatBitsLut::operator() for a vector: clamp into [lo, hi), index from the float's bits,
+// linear interpolation inside the bucket.
+HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
+  const DU du;
+  const DI di;
+  constexpr int kShift = 15;  // 23 - FloatBitsLut::kBitsPerOctave
+  v = hn::Min(hn::Max(v, hn::Set(df, l.lo)), hn::Set(df, l.hi_prev));
+  const auto rel = hn::Sub(hn::BitCast(du, v), hn::Set(du, l.base_bits));
+  const auto idx = hn::BitCast(di, hn::ShiftRight<kShift>(rel));
+  const VF frac = hn::Mul(hn::ConvertTo(df, hn::BitCast(di, hn::And(rel, hn::Set(du, (1u << kShift) - 1)))),
+                          hn::Set(df, 1.0f / (1u << kShift)));
+  const VF a = hn::GatherIndex(df, l.table, idx);
+  const VF b = hn::GatherIndex(df, l.table + 1, idx);
+  return hn::MulAdd(hn::Sub(b, a), frac, a);
+}
+
+HWY_INLINE VF sanitize(DF df, VF v) {
+  const VF c = hn::Min(hn::Max(v, hn::Set(df, -1e30f)), hn::Set(df, 1e30f));
+  return hn::IfThenElseZero(hn::Eq(v, v), c);  // NaN -> 0
+}
+
+HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
+  if (r.half_in) {
+    const hn::Rebind<std::uint16_t, DF> du16;
+    const hn::Rebind<hwy::float16_t, DF> dh;
+    hn::Vec<decltype(du16)> r16, g16, b16, a16;
+    hn::LoadInterleaved4(du16, r.half_in + static_cast<std::size_t>(x) * 4, r16, g16, b16, a16);
+    R = hn::PromoteTo(df, hn::BitCast(dh, r16));
+    G = hn::PromoteTo(df, hn::BitCast(dh, g16));
+    B = hn::PromoteTo(df, hn::BitCast(dh, b16));
+  } else {
+    VF a;
+    hn::LoadInterleaved4(df, r.float_in + static_cast<std::size_t>(x) * 4, R, G, B, a);
+  }
+}
+
+HWY_INLINE void matrix(DF df, const float* m, VF& r, VF& g, VF& b) {
+  const VF x = r, y = g, z = b;
+  r = hn::MulAdd(hn::Set(df, m[0]), x, hn::MulAdd(hn::Set(df, m[1]), y, hn::Mul(hn::Set(df, m[2]), z)));
+  g = hn::MulAdd(hn::Set(df, m[3]), x, hn::MulAdd(hn::Set(df, m[4]), y, hn::Mul(hn::Set(df, m[5]), z)));
+  b = hn::MulAdd(hn::Set(df, m[6]), x, hn::MulAdd(hn::Set(df, m[7]), y, hn::Mul(hn::Set(df, m[8]), z)));
+}
+
+HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
+  const VF zero = hn::Zero(df);
+  R = hn::Max(R, zero), G = hn::Max(G, zero), B = hn::Max(B, zero);
+  switch (r.tone) {
+    case FusedTone::clip: {
+      const VF pw = hn::Set(df, r.paper_white), pk = hn::Set(df, r.peak);
+      R = hn::Min(hn::Mul(R, pw), pk), G = hn::Min(hn::Mul(G, pw), pk), B = hn::Min(hn::Mul(B, pw), pk);
+      break;
+    }
+    case FusedTone::per_channel:
+      R = lut(df, r.tone_lut, R), G = lut(df, r.tone_lut, G), B = lut(df, r.tone_lut, B);
+      break;
+    default: {
+      VF k = r.tone == FusedTone::ratio_max
+                       ? hn::Max(hn::Max(R, G), B)
+                       : hn::MulAdd(hn::Set(df, 0.2627f), R,
+                                    hn::MulAdd(hn::Set(df, 0.6780f), G, hn::Mul(hn::Set(df, 0.0593f), B)));
+      if (r.tone == FusedTone::ratio_max && r.m_container) {
+        // The largest channel in the output container too, so no output channel passes the peak.
+        VF cr = R, cg = G, cb = B;
+        matrix(df, r.m_container, cr, cg, cb);
+        k = hn::Max(k, hn::Max(hn::Max(cr, cg), cb));
+      }
+      // Above the table: the curve's value at the top, spread over k (saturates at the peak).
+      const VF above = hn::Min(hn::Set(df, 1.0f), hn::Div(hn::Set(df, r.tone_lut.hi), k));
+      const VF ratio = hn::IfThenZeroElse(hn::Le(k, zero), hn::Mul(lut(df, r.tone_lut, k), above));
+      R = hn::Mul(R, ratio), G = hn::Mul(G, ratio), B = hn::Mul(B, ratio);
+    }
+  }
+}
+
+void FusedRowImpl(FusedRow& r) {
+  const DF df;
+  const DU du;
+  const DI di;
+  const int N = static_cast<int>(hn::Lanes(df));
+  const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
+  const VF scale = hn::Set(df, r.code_scale), bias = hn::Set(df, r.code_offset + 0.5f);
+  const auto max_code = hn::Set(di, r.max_code);
+  auto vmax = hn::Zero(df);
+  auto vsum = hn::Zero(df);  // per-lane sums of at most n / N values: float is enough
+  int x = 0;
+  for (; x + N <= r.n; x += N) {
+    VF R, G, B;
+    load_rgb(df, r, x, R, G, B);
+    R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
+    matrix(df, r.m_in, R, G, B);
+    tone(df, r, R, G, B);
+    const VF work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
+    if (r.m_container) matrix(df, r.m_container, R, G, B);
+    const auto ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
+                            hn::And(hn::Le(G, hi), hn::Le(B, hi)));
+    if (!hn::AllTrue(df, ok)) {
+      alignas(64) float okf[64];
+      hn::Store(hn::IfThenElseZero(ok, hn::Set(df, 1.0f)), df, okf);
+      for (int i = 0; i < N; ++i)
+        if (okf[i] == 0.0f) r.fallback[r.fallback_count++] = x + i;
+    }
+    if (r.out_kind == FusedOut::scrgb) {
+      const hn::Rebind<std::uint16_t, DF> du16;
+      const hn::Rebind<hwy::float16_t, DF> dh;
+      const VF k80 = hn::Set(df, 1.0f / 80.0f);
+      const auto h_r = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(R, k80)));
+      const auto h_g = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(G, k80)));
+      const auto h_b = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(B, k80)));
+      hn::StoreInterleaved4(h_r, h_g, h_b, hn::Set(du16, 0x3C00), du16,
+                            reinterpret_cast<std::uint16_t*>(r.out) + static_cast<std::size_t>(x) * 4);
+      const VF m = hn::IfThenElseZero(ok, work_max);
+      vmax = hn::Max(vmax, m);
+      vsum = hn::Add(vsum, m);
+      continue;
+    }
+    // Signal -> codes (full: round(E' (2^n - 1)); narrow: round((219 E' + 16) 2^(n-8))).
+    const VF one = hn::Set(df, 1.0f), zero = hn::Zero(df);
+    const VF er = hn::Min(hn::Max(lut(df, r.signal, R), zero), one);
+    const VF eg = hn::Min(hn::Max(lut(df, r.signal, G), zero), one);
+    const VF eb = hn::Min(hn::Max(lut(df, r.signal, B), zero), one);
+    const auto cr = hn::Min(hn::ConvertTo(di, hn::MulAdd(er, scale, bias)), max_code);
+    const auto cg = hn::Min(hn::ConvertTo(di, hn::MulAdd(eg, scale, bias)), max_code);
+    const auto cb = hn::Min(hn::ConvertTo(di, hn::MulAdd(eb, scale, bias)), max_code);
+    auto* out32 = reinterpret_cast<std::uint32_t*>(r.out) + x;
+    if (r.out_kind == FusedOut::xrgb8) {
+      const auto w = hn::Or(hn::Or(hn::BitCast(du, cb), hn::ShiftLeft<8>(hn::BitCast(du, cg))),
+                            hn::Or(hn::ShiftLeft<16>(hn::BitCast(du, cr)), hn::Set(du, 0xFF000000u)));
+      hn::StoreU(w, du, out32);
+      continue;
+    }
+    const auto w = hn::Or(hn::Or(hn::BitCast(du, cr), hn::ShiftLeft<10>(hn::BitCast(du, cg))),
+                          hn::Or(hn::ShiftLeft<20>(hn::BitCast(du, cb)), hn::Set(du, 3u << 30)));
+    hn::StoreU(w, du, out32);
+    if (r.signal16) {
+      const hn::Rebind<std::uint16_t, DF> du16;
+      const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
+      auto s16 = [&](VF e, decltype(cr) c) {
+        const VF v = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
+                              : hn::MulAdd(e, k16, half);
+        return hn::DemoteTo(du16, hn::ConvertTo(di, v));
+      };
+      hn::StoreInterleaved3(s16(er, cr), s16(eg, cg), s16(eb, cb), du16, r.signal16 + static_cast<std::size_t>(x) * 3);
+    }
+    if (r.code_to_nits) {
+      const auto cmax = hn::Max(hn::Max(cr, cg), cb);
+      const VF m = hn::IfThenElseZero(ok, hn::GatherIndex(df, r.code_to_nits, cmax));
+      vmax = hn::Max(vmax, m);
+      vsum = hn::Add(vsum, m);
+    }
+  }
+  r.done = x;
+  r.max_nits = std::max<double>(r.max_nits, hn::GetLane(hn::MaxOfLanes(df, vmax)));
+  r.sum_nits += hn::GetLane(hn::SumOfLanes(df, vsum));
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace hdrd::kernels
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace hdrd::kernels {
+HWY_EXPORT(FusedRowImpl);
+void fused_row(FusedRow& r) { HWY_DYNAMIC_DISPATCH(FusedRowImpl)(r); }
+}  // namespace hdrd::kernels
+#endif

@@ -1,0 +1,51 @@
+// The fused SIMD row kernel for the common encode path: half/float input -> sanitise ->
+// input matrix with exposure -> tone (clip, ratio of max(RGB) or luminance, or per-channel
+// LUT) -> container matrix -> signal LUT -> codes -> packed DRM pixels (+ PNG samples,
+// MaxCLL/MaxFALL). Pixels that leave the display gamut are reported back for the exact
+// (ICtCp) path. Dispatches at run time to the best SIMD target (Highway).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace hdrd::kernels {
+
+struct LutView {
+  const float* table = nullptr;  // FloatBitsLut::table()
+  std::uint32_t base_bits = 0;
+  float lo = 0, hi = 0;
+  float hi_prev = 0;  // the largest float below hi
+};
+
+enum class FusedTone : int { clip = 0, ratio_max = 1, ratio_luminance = 2, per_channel = 3 };
+enum class FusedOut : int { packed10 = 0, xrgb8 = 1, scrgb = 2 };
+
+struct FusedRow {
+  // input (one of the two), n pixels
+  const std::uint16_t* half_in = nullptr;
+  const float* float_in = nullptr;
+  int n = 0;
+  const float* m_in = nullptr;  // 3x3 row-major, exposure folded in
+  FusedTone tone = FusedTone::clip;
+  float paper_white = 203, peak = 1000;
+  LutView tone_lut;
+  const float* m_container = nullptr;  // null: container = working (Rec.2020)
+  float gamut_lo = 0, gamut_hi = 0;    // accepted container range (tolerances included)
+  FusedOut out_kind = FusedOut::packed10;
+  LutView signal;
+  float code_scale = 1023, code_offset = 0;
+  int max_code = 1023;
+  bool narrow = false;
+  std::uint8_t* out = nullptr;         // row start
+  std::uint16_t* signal16 = nullptr;   // row start or null
+  const float* code_to_nits = nullptr; // MaxCLL from decoded codes (hdr10), or null
+  // results
+  double max_nits = 0, sum_nits = 0;   // CLL of the pixels handled here
+  int* fallback = nullptr;             // capacity n: x of pixels left for the exact path
+  int fallback_count = 0;
+  int done = 0;                        // pixels [0, done) handled (the rest: a tail for the scalar path)
+};
+
+void fused_row(FusedRow& r);
+
+}  // namespace hdrd::kernels
