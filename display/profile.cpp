@@ -1,0 +1,289 @@
+// Display profile from an EDID. The rules, in the order docs/displays.md lists them:
+//  mode   HDR10 when ST 2084 and BT2020RGB are signalled (CTA-861-G §7.5.13, §7.5.5, or a
+//         DisplayID 2.0 "BT.2020/SMPTE ST 2084" interface combination), HLG when HLG is
+//         signalled without ST 2084, otherwise SDR.
+//  peak   desired content max luminance; when missing, CV 0, below 100 or above 10000
+//         cd/m2: DisplayID's native max (10 %), else 1000 (HDR) / 100 (SDR).
+//  FALL   desired content max frame-average; when missing: DisplayID full-coverage max,
+//         else the peak; never above the peak.
+//  black  desired content min luminance (computed from the same block's max, so unusable
+//         when that max is); else DisplayID native min; else the mode's default.
+//  primaries  base block chromaticities; else DisplayID's; else Rec.709.
+#include "display/profile.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+
+#include <fmt/format.h>
+
+#include "display/edid_json.hpp"
+
+namespace hdrd::display {
+namespace {
+
+struct Signals {
+  bool pq = false, hlg = false, bt2020_rgb = false, displayid_bt2020_pq = false;
+};
+
+Signals signals_of(const EdidInfo& e) {
+  Signals s;
+  if (e.hdr_static_metadata) {
+    s.pq = e.hdr_static_metadata->pq();
+    s.hlg = e.hdr_static_metadata->hlg();
+  }
+  s.bt2020_rgb = e.colorimetry && e.colorimetry->bt2020_rgb();
+  s.displayid_bt2020_pq = e.displayid_interface && e.displayid_interface->bt2020_pq();
+  return s;
+}
+
+void choose_mode(const Signals& s, Profile& p) {
+  const bool pq = s.pq || s.displayid_bt2020_pq;
+  const bool bt2020 = s.bt2020_rgb || s.displayid_bt2020_pq;
+  if (pq && bt2020) {
+    p.mode = Mode::hdr10;
+    p.mode_reason = s.pq && s.bt2020_rgb ? "SMPTE ST 2084 and BT2020RGB are signalled"
+                                         : "DisplayID 2.0 signals the BT.2020/SMPTE ST 2084 combination";
+  } else if (s.hlg && !pq) {
+    p.mode = Mode::hlg;
+    p.mode_reason = "HLG is signalled without SMPTE ST 2084";
+    if (!s.bt2020_rgb) p.notes.push_back("HLG is signalled without BT2020RGB colorimetry; BT.2020 is sent anyway");
+  } else if (pq) {
+    p.mode = Mode::sdr;
+    p.mode_reason = "SMPTE ST 2084 is signalled but BT2020RGB colorimetry is not, so HDR10 cannot be sent as RGB";
+  } else {
+    p.mode = Mode::sdr;
+    p.mode_reason = "no HDR transfer function is signalled";
+  }
+}
+
+bool plausible_peak(double nits) { return std::isfinite(nits) && nits >= kMinPlausibleHdrPeakNits && nits <= kMaxPqNits; }
+
+std::string cv_text(const char* what, std::uint8_t cv, double nits) {
+  return fmt::format("{} CV {} ({:.3f} cd/m2)", what, cv, nits);
+}
+
+// Returns the block's max luminance when usable, else records why not.
+std::optional<double> usable_max(const EdidInfo& e, Profile& p) {
+  if (!e.hdr_static_metadata) return std::nullopt;
+  const auto& h = *e.hdr_static_metadata;
+  if (!h.max_luminance_cv) {
+    if (p.is_hdr()) p.notes.push_back("HDR Static Metadata Data Block has no luminance bytes");
+    return std::nullopt;
+  }
+  const double max = *h.max_luminance_cd_m2();
+  // CTA-861.3 leaves 0 as "no data" (libdisplay-info reads it so); PQ cannot exceed 10000.
+  if (*h.max_luminance_cv == 0 || !plausible_peak(max)) {
+    p.notes.push_back(cv_text("desired content max luminance", *h.max_luminance_cv, max) +
+                      " is not a plausible display peak: ignored");
+    return std::nullopt;
+  }
+  return max;
+}
+
+void choose_peak(const EdidInfo& e, std::optional<double> block_max, Profile& p) {
+  if (block_max) {
+    p.peak_nits = *block_max;
+    return;
+  }
+  const auto& d = e.displayid_parameters;
+  if (d && plausible_peak(d->max_10pct_cd_m2())) {
+    p.peak_nits = d->max_10pct_cd_m2();
+    p.notes.push_back(fmt::format("peak {:.1f} cd/m2 from DisplayID native max luminance (10% coverage)", p.peak_nits));
+  } else if (d && plausible_peak(d->max_full_cd_m2())) {
+    p.peak_nits = d->max_full_cd_m2();
+    p.notes.push_back(fmt::format("peak {:.1f} cd/m2 from DisplayID native max luminance (full coverage)", p.peak_nits));
+  } else if (p.is_hdr()) {
+    p.peak_nits = kFallbackHdrPeakNits;
+    p.notes.push_back(fmt::format("no usable max luminance: peak falls back to {:.0f} cd/m2 (hdrd's HDR default; "
+                                  "KWin uses 800, gamescope 1499)", kFallbackHdrPeakNits));
+  } else {
+    p.peak_nits = kFallbackSdrPeakNits;
+  }
+}
+
+void choose_frame_average(const EdidInfo& e, bool block_usable, Profile& p) {
+  std::optional<double> fall;
+  if (block_usable && e.hdr_static_metadata) {
+    const auto& h = *e.hdr_static_metadata;
+    if (h.max_frame_avg_luminance_cv && *h.max_frame_avg_luminance_cv != 0) fall = h.max_frame_avg_luminance_cd_m2();
+    else if (h.max_frame_avg_luminance_cv) p.notes.push_back("max frame-average luminance CV 0 (no data): ignored");
+  }
+  if (!fall && e.displayid_parameters && e.displayid_parameters->max_full_cd_m2() > 0 &&
+      std::isfinite(e.displayid_parameters->max_full_cd_m2())) {
+    fall = e.displayid_parameters->max_full_cd_m2();
+    p.notes.push_back(fmt::format("frame-average {:.1f} cd/m2 from DisplayID native max luminance (full coverage)", *fall));
+  }
+  if (!fall) {
+    p.frame_average_nits = p.peak_nits;
+    if (p.is_hdr()) p.notes.push_back("no max frame-average luminance: frame-average = peak");
+    return;
+  }
+  if (*fall > p.peak_nits) {
+    p.notes.push_back(fmt::format("max frame-average luminance {:.3f} cd/m2 exceeds the peak {:.3f} cd/m2: "
+                                  "clamped to the peak", *fall, p.peak_nits));
+    fall = p.peak_nits;
+  }
+  p.frame_average_nits = *fall;
+}
+
+void choose_black(const EdidInfo& e, bool block_usable, Profile& p) {
+  std::optional<double> black;
+  if (e.hdr_static_metadata && e.hdr_static_metadata->min_luminance_cv) {
+    const auto& h = *e.hdr_static_metadata;
+    if (block_usable || *h.min_luminance_cv == 0) black = h.min_luminance_cd_m2();
+    else p.notes.push_back("desired content min luminance depends on the ignored max: ignored");
+  }
+  if (!black && e.displayid_parameters) {
+    const double m = e.displayid_parameters->min_cd_m2();
+    if (std::isfinite(m) && m > 0) {
+      black = m;
+      p.notes.push_back(fmt::format("black {:.4f} cd/m2 from DisplayID native min luminance", m));
+    }
+  }
+  const double fallback = p.is_hdr() ? default_target(p.mode).black_nits : p.peak_nits / 1000.0;
+  if (black && *black >= p.peak_nits) {
+    p.notes.push_back(fmt::format("min luminance {:.3f} cd/m2 is not below the peak: ignored", *black));
+    black.reset();
+  }
+  p.black_nits = black ? *black : fallback;
+}
+
+bool plausible_primaries(const color::Primaries& pr) {
+  for (const auto& c : {pr.red, pr.green, pr.blue, pr.white})
+    if (!(c.x > 0 && c.y > 0 && c.x + c.y <= 1.0)) return false;
+  // A degenerate triangle cannot be a display gamut.
+  const double area = (pr.green.x - pr.red.x) * (pr.blue.y - pr.red.y) - (pr.blue.x - pr.red.x) * (pr.green.y - pr.red.y);
+  return std::abs(area) > 1e-3;
+}
+
+void choose_primaries(const EdidInfo& e, Profile& p) {
+  const auto base = e.chromaticity.primaries();
+  if (plausible_primaries(base)) {
+    p.primaries = base;
+  } else if (e.displayid_parameters && plausible_primaries(e.displayid_parameters->primaries)) {
+    p.primaries = e.displayid_parameters->primaries;
+    p.notes.push_back("base block chromaticities are unusable: primaries from DisplayID");
+  } else {
+    p.primaries = color::kRec709;
+    p.notes.push_back("no usable chromaticities: primaries fall back to Rec.709");
+  }
+}
+
+}  // namespace
+
+Profile profile_from_edid_info(const EdidInfo& e) {
+  Profile p;
+  p.name = e.name;
+  p.manufacturer = e.manufacturer;
+  p.product_code = e.product_code;
+  const Signals s = signals_of(e);
+  p.signals_pq = s.pq || s.displayid_bt2020_pq;
+  p.signals_hlg = s.hlg;
+  p.signals_bt2020_rgb = s.bt2020_rgb;
+  p.hdr10plus = e.hdr10plus_vsvdb;
+  choose_mode(s, p);
+  const auto block_max = usable_max(e, p);
+  choose_peak(e, block_max, p);
+  choose_frame_average(e, block_max.has_value(), p);
+  choose_black(e, block_max.has_value(), p);
+  choose_primaries(e, p);
+  p.source = "edid:" + (e.name.empty() ? fmt::format("{}{:04X}", e.manufacturer, e.product_code) : e.name);
+  return p;
+}
+
+Result<Profile> profile_from_edid(std::span<const std::uint8_t> edid) {
+  auto info = parse_edid(edid);
+  if (!info) return info.error();
+  return profile_from_edid_info(*info);
+}
+
+Result<std::vector<std::uint8_t>> read_binary_file(const std::filesystem::path& path, std::size_t max_bytes) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return make_error("file.open", fmt::format("cannot open {}", path.string()), "path");
+  std::vector<std::uint8_t> bytes;
+  char buf[4096];
+  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+    bytes.insert(bytes.end(), buf, buf + f.gcount());
+    if (bytes.size() > max_bytes)
+      return make_error("file.too_large", fmt::format("{} is larger than {} bytes", path.string(), max_bytes), "path");
+  }
+  return bytes;
+}
+
+Result<Profile> profile_from_edid_file(const std::filesystem::path& path) {
+  auto bytes = read_binary_file(path);
+  if (!bytes) return bytes.error();
+  auto info = parse_edid(*bytes);
+  if (!info) {
+    Error err = info.error();
+    err.message = path.string() + ": " + err.message;
+    return err;
+  }
+  return profile_from_edid_info(*info);
+}
+
+void apply_profile(const Profile& p, DisplayTarget& t, bool set_mode) {
+  const bool was_sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
+  const bool whites_coupled = was_sdr && t.paper_white_nits == t.peak_nits;
+  if (set_mode && t.mode != p.mode) {
+    const DisplayTarget d = default_target(p.mode);
+    t.mode = p.mode;
+    t.bits = d.bits;
+    if (!was_sdr) {
+      t.paper_white_nits = d.paper_white_nits;
+      t.ui_white_nits = d.ui_white_nits;
+      t.sdr_white_nits = d.sdr_white_nits;
+    }
+  }
+  const bool now_sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
+  t.peak_nits = p.peak_nits;
+  t.black_nits = p.black_nits;
+  t.display_primaries = p.primaries;
+  t.source = p.source;
+  if (now_sdr && (whites_coupled || !was_sdr)) {
+    t.paper_white_nits = t.ui_white_nits = t.sdr_white_nits = p.peak_nits;
+  }
+}
+
+DisplayTarget target_for_profile(const Profile& p) {
+  DisplayTarget t = default_target(p.mode);
+  apply_profile(p, t, true);
+  return t;
+}
+
+Result<void> validate_profile(const Profile& p) {
+  auto bad = [](const char* field, std::string msg) { return make_error("profile.invalid", std::move(msg), field); };
+  if (!std::isfinite(p.peak_nits) || p.peak_nits <= 0 || p.peak_nits > kMaxPqNits)
+    return bad("peak_nits", fmt::format("peak {} cd/m2 is not in (0, 10000]", p.peak_nits));
+  if (!std::isfinite(p.frame_average_nits) || p.frame_average_nits <= 0 || p.frame_average_nits > p.peak_nits)
+    return bad("frame_average_nits",
+               fmt::format("frame-average {} cd/m2 must be in (0, peak {}]", p.frame_average_nits, p.peak_nits));
+  if (!std::isfinite(p.black_nits) || p.black_nits < 0 || p.black_nits >= p.peak_nits)
+    return bad("black_nits", fmt::format("black {} cd/m2 must be >= 0 and below the peak {}", p.black_nits, p.peak_nits));
+  for (const auto& c : {p.primaries.red, p.primaries.green, p.primaries.blue, p.primaries.white})
+    if (!(std::isfinite(c.x) && std::isfinite(c.y) && c.x >= 0 && c.y > 0 && c.x <= 1 && c.y <= 1))
+      return bad("primaries", fmt::format("chromaticity ({}, {}) is outside the unit square", c.x, c.y));
+  return {};
+}
+
+nlohmann::json profile_to_json(const Profile& p) {
+  auto xy = [](color::Chromaticity c) { return nlohmann::json::array({c.x, c.y}); };
+  return {{"mode", std::string(to_string(p.mode))},
+          {"mode_reason", p.mode_reason},
+          {"peak_nits", p.peak_nits},
+          {"frame_average_nits", p.frame_average_nits},
+          {"black_nits", p.black_nits},
+          {"primaries",
+           {{"red", xy(p.primaries.red)}, {"green", xy(p.primaries.green)}, {"blue", xy(p.primaries.blue)},
+            {"white", xy(p.primaries.white)}}},
+          {"name", p.name},
+          {"manufacturer", p.manufacturer},
+          {"product_code", p.product_code},
+          {"signals", {{"pq", p.signals_pq}, {"hlg", p.signals_hlg}, {"bt2020_rgb", p.signals_bt2020_rgb},
+                       {"hdr10plus", p.hdr10plus}}},
+          {"notes", p.notes},
+          {"source", p.source}};
+}
+
+}  // namespace hdrd::display
