@@ -1,10 +1,12 @@
 // Scene upload: vertex/index buffers, material textures (sRGB where glTF says so),
 // and the uniform blocks of gpu_blocks.hpp.
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 #include <fmt/format.h>
 
+#include "encode/transfer.hpp"
 #include "shading/materials.hpp"
 #include "shading/renderer_impl.hpp"
 
@@ -33,15 +35,50 @@ int mip_levels(int w, int h) {
   return levels;
 }
 
+// IEEE binary16 bits of a float in [0, 1], rounded to nearest even.
+std::uint16_t half_bits(float f) {
+  std::uint32_t x;
+  std::memcpy(&x, &f, 4);
+  const std::uint32_t sign = (x >> 16) & 0x8000u;
+  const int exp = static_cast<int>((x >> 23) & 0xff) - 127 + 15;
+  std::uint32_t mant = x & 0x7fffffu;
+  if (exp <= 0) {  // subnormal half
+    if (exp < -10) return static_cast<std::uint16_t>(sign);
+    mant |= 0x800000u;
+    const int shift = 14 - exp;
+    const std::uint32_t half = mant >> shift, rest = mant & ((1u << shift) - 1), mid = 1u << (shift - 1);
+    return static_cast<std::uint16_t>(sign | (half + (rest > mid || (rest == mid && (half & 1)))));
+  }
+  const std::uint32_t base = (static_cast<std::uint32_t>(exp) << 10) | (mant >> 13), rest = mant & 0x1fffu;
+  return static_cast<std::uint16_t>(sign | (base + (rest > 0x1000u || (rest == 0x1000u && (base & 1)))));
+}
+
+// sRGB-encoded texels, decoded on the CPU with the IEC 61966-2-1 curve (encode/transfer)
+// into correctly rounded halves: llvmpipe's GL_SRGB8_ALPHA8 sampler approximates the
+// curve (136/255 -> 0.24686 instead of 0.24620), halves stay within 6e-5.
+std::vector<std::uint16_t> decode_srgb_to_half(const Texture& t) {
+  std::array<std::uint16_t, 256> colour{}, alpha{};
+  for (int i = 0; i < 256; ++i) {
+    colour[i] = half_bits(static_cast<float>(transfer::srgb_eotf(i / 255.0)));
+    alpha[i] = half_bits(static_cast<float>(i / 255.0));
+  }
+  std::vector<std::uint16_t> out(t.rgba8.size());
+  for (std::size_t i = 0; i < t.rgba8.size(); ++i) out[i] = (i % 4 == 3 ? alpha : colour)[t.rgba8[i]];
+  return out;
+}
+
 GlName upload_texture(const GlApi& gl, const Texture& t, bool srgb) {
   GlName tex = gen_texture(gl);
   gl.BindTexture(GL_TEXTURE_2D, tex.id());
   const int levels = t.mipmaps ? mip_levels(t.width, t.height) : 1;
-  // GL_SRGB8_ALPHA8: the sampler decodes with the IEC 61966-2-1 curve (glTF base
-  // colour and emissive textures are sRGB-encoded; 136/255 -> 0.2462).
-  gl.TexStorage2D(GL_TEXTURE_2D, levels, srgb ? GL_SRGB8_ALPHA8 : GL_RGBA8, t.width, t.height);
+  gl.TexStorage2D(GL_TEXTURE_2D, levels, srgb ? GL_RGBA16F : GL_RGBA8, t.width, t.height);
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  gl.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, t.width, t.height, GL_RGBA, GL_UNSIGNED_BYTE, t.rgba8.data());
+  if (srgb) {
+    const auto halves = decode_srgb_to_half(t);
+    gl.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, t.width, t.height, GL_RGBA, GL_HALF_FLOAT, halves.data());
+  } else {
+    gl.TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, t.width, t.height, GL_RGBA, GL_UNSIGNED_BYTE, t.rgba8.data());
+  }
   if (levels > 1) gl.GenerateMipmap(GL_TEXTURE_2D);
   const GLint mag = t.linear_filter ? GL_LINEAR : GL_NEAREST;
   const GLint min = levels > 1 ? (t.linear_filter ? GL_LINEAR_MIPMAP_LINEAR : GL_NEAREST_MIPMAP_NEAREST) : mag;

@@ -58,7 +58,7 @@ Result<void> validate_material(const Material& m, std::size_t i, std::size_t tex
 }
 
 // Drops zero-area triangles (warning), rejects out-of-range indices and NaN attributes.
-Result<void> validate_mesh(Mesh& m, std::size_t i, std::vector<std::string>& warnings) {
+Result<void> validate_mesh(Mesh& m, std::size_t i, std::vector<std::string>& warnings, std::int64_t& dropped) {
   const std::string f = fmt::format("meshes[{}] '{}'", i, m.name);
   if (m.indices.size() % 3 != 0) return scene_error(f, "index count is not a multiple of 3");
   bool bad_normal = false;
@@ -80,8 +80,7 @@ Result<void> validate_mesh(Mesh& m, std::size_t i, std::vector<std::string>& war
     kept.insert(kept.end(), {a, b, c});
   }
   if (kept.empty()) return scene_error(f, "has no non-degenerate triangle");
-  if (kept.size() != m.indices.size())
-    warnings.push_back(fmt::format("{}: dropped {} degenerate triangles", f, (m.indices.size() - kept.size()) / 3));
+  dropped += static_cast<std::int64_t>((m.indices.size() - kept.size()) / 3);
   m.indices = std::move(kept);
   if (bad_normal) {
     warnings.push_back(f + ": missing or zero normals recomputed from the triangles");
@@ -161,8 +160,10 @@ Result<void> validate(Scene& s, const SceneLimits& limits) {
     if (auto r = validate_light(s.lights[i], i); !r) return r;
   for (std::size_t i = 0; i < s.materials.size(); ++i)
     if (auto r = validate_material(s.materials[i], i, s.textures.size()); !r) return r;
+  std::int64_t dropped = 0;
   for (std::size_t i = 0; i < s.meshes.size(); ++i)
-    if (auto r = validate_mesh(s.meshes[i], i, s.warnings); !r) return r;
+    if (auto r = validate_mesh(s.meshes[i], i, s.warnings, dropped); !r) return r;
+  if (dropped > 0) s.warnings.push_back(fmt::format("dropped {} zero-area triangles", dropped));
   std::int64_t triangles = 0;
   for (std::size_t i = 0; i < s.instances.size(); ++i) {
     const Instance& inst = s.instances[i];

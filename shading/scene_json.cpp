@@ -29,7 +29,7 @@ class Reader {
   }
 
   // The object itself, and that it has no keys outside `allowed`.
-  bool object(const json& j, const std::string& path, std::initializer_list<const char*> allowed) {
+  bool object(const json& j, const std::string& path, const std::vector<std::string_view>& allowed) {
     if (failed()) return false;
     if (!j.is_object()) {
       fail(path.empty() ? "scene" : path, "must be an object");
@@ -369,7 +369,7 @@ void read_objects(Reader& r, const json& doc, Scene& s, const std::map<std::stri
     const std::string p = fmt::format("objects[{}]", i);
     if (!j.is_object()) return r.fail(p, "must be an object");
     const std::string type = r.string(j, p, "type", "");
-    static const std::map<std::string, std::initializer_list<const char*>> kFields = {
+    static const std::map<std::string, std::vector<std::string_view>> kFields = {
         {"sphere", {"type", "name", "material", "position", "rotation_deg", "scale", "radius", "segments", "rings"}},
         {"plane", {"type", "name", "material", "position", "rotation_deg", "scale", "size"}},
         {"box", {"type", "name", "material", "position", "rotation_deg", "scale", "size"}},
