@@ -1,0 +1,245 @@
+#include "daemon/config.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+namespace fs = std::filesystem;
+
+namespace hdrd::daemon {
+namespace {
+
+[[noreturn]] void config_fail(const std::string& where, const std::string& message, const std::string& key) {
+  throw HdrdError(make_error("config.invalid", where + ": " + message, key));
+}
+
+std::string where(const std::string& source, const toml::node& n) {
+  const auto& s = n.source();
+  return fmt::format("{}:{}", source, s.begin.line);
+}
+
+// Reads the keys of one TOML table; finish() refuses keys nobody read.
+class Section {
+ public:
+  Section(const toml::table& root, std::string name, std::string source) : name_(std::move(name)), source_(std::move(source)) {
+    if (const toml::node* n = root.get(name_)) {
+      table_ = n->as_table();
+      if (!table_) config_fail(where(source_, *n), "[" + name_ + "] must be a table", name_);
+    }
+  }
+
+  template <class T>
+  void read(std::string_view key, T& out) {
+    seen_.insert(std::string(key));
+    if (!table_) return;
+    const toml::node* n = table_->get(key);
+    if (!n) return;
+    const std::string full = name_ + "." + std::string(key);
+    if constexpr (std::is_same_v<T, bool>) {
+      if (!n->is_boolean()) config_fail(where(source_, *n), full + " must be true or false", full);
+      out = n->value<bool>().value();
+    } else if constexpr (std::is_integral_v<T>) {
+      if (!n->is_integer()) config_fail(where(source_, *n), full + " must be an integer", full);
+      const auto v = n->value<std::int64_t>().value();
+      if (v < 0 || v > std::int64_t(std::numeric_limits<T>::max()))
+        config_fail(where(source_, *n), fmt::format("{} = {} is out of range", full, v), full);
+      out = T(v);
+    } else if constexpr (std::is_floating_point_v<T>) {
+      if (!n->is_number()) config_fail(where(source_, *n), full + " must be a number", full);
+      out = n->value<double>().value();
+      if (!std::isfinite(out) || out < 0) config_fail(where(source_, *n), full + " must be a finite number >= 0", full);
+    } else if constexpr (std::is_same_v<T, fs::path>) {
+      if (!n->is_string()) config_fail(where(source_, *n), full + " must be a string (a path)", full);
+      out = fs::path(n->value<std::string>().value());
+    } else {
+      if (!n->is_string()) config_fail(where(source_, *n), full + " must be a string", full);
+      out = n->value<std::string>().value();
+    }
+  }
+
+  void finish() const {
+    if (!table_) return;
+    for (auto&& [k, v] : *table_)
+      if (!seen_.count(std::string(k.str())))
+        config_fail(where(source_, v), fmt::format("unknown key {}.{}", name_, k.str()), name_ + "." + std::string(k.str()));
+  }
+
+ private:
+  std::string name_, source_;
+  const toml::table* table_ = nullptr;
+  std::set<std::string> seen_;
+};
+
+unsigned parse_mode_octal(const std::string& s, const std::string& source) {
+  if (s.empty() || s.size() > 4 || s.find_first_not_of("01234567") != std::string::npos)
+    config_fail(source, "server.socket_mode must be an octal string such as \"0660\"", "server.socket_mode");
+  return unsigned(std::stoul(s, nullptr, 8));
+}
+
+}  // namespace
+
+fs::path default_socket_path() {
+  if (const char* x = std::getenv("XDG_RUNTIME_DIR"); x && *x) return fs::path(x) / "hdrd.sock";
+  return "/run/hdrd/hdrd.sock";
+}
+
+Config parse_config(std::string_view text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    config_fail(fmt::format("{}:{}", source, e.source().begin.line), std::string(e.description()), "");
+  }
+  for (auto&& [k, v] : root) {
+    static const std::set<std::string> kSections = {"server", "workers", "paths", "limits", "render", "log"};
+    if (!kSections.count(std::string(k.str())))
+      config_fail(where(source, v), fmt::format("unknown section [{}]", k.str()), std::string(k.str()));
+  }
+  Config c;
+  c.source = source;
+
+  Section server(root, "server", source);
+  std::string mode = "0660";
+  server.read("socket_path", c.server.socket_path);
+  server.read("socket_mode", mode);
+  c.server.socket_mode = parse_mode_octal(mode, source);
+  server.read("socket_group", c.server.socket_group);
+  server.read("systemd_activation", c.server.systemd_activation);
+  server.read("tcp_listen", c.server.tcp_listen);
+  server.read("tcp_allow_non_loopback", c.server.tcp_allow_non_loopback);
+  server.read("token", c.server.token);
+  server.read("token_file", c.server.token_file);
+  server.read("connection_timeout_s", c.server.connection_timeout_s);
+  server.read("max_connections", c.server.max_connections);
+  server.read("http_threads", c.server.http_threads);
+  server.read("drain_timeout_s", c.server.drain_timeout_s);
+  server.finish();
+
+  Section workers(root, "workers", source);
+  workers.read("render_workers", c.workers.render_workers);
+  workers.read("encode_threads", c.workers.encode_threads);
+  workers.read("queue_depth", c.workers.queue_depth);
+  workers.read("backend", c.workers.backend);
+  workers.read("coalesce", c.workers.coalesce);
+  workers.read("retry_after_s", c.workers.retry_after_s);
+  workers.finish();
+
+  Section paths(root, "paths", source);
+  paths.read("asset_root", c.paths.asset_root);
+  paths.read("dump_dir", c.paths.dump_dir);
+  paths.finish();
+
+  Section limits(root, "limits", source);
+  limits.read("max_width", c.limits.max_width);
+  limits.read("max_height", c.limits.max_height);
+  limits.read("max_pixels", c.limits.max_pixels);
+  limits.read("max_samples", c.limits.max_samples);
+  limits.read("max_lights", c.limits.max_lights);
+  limits.read("max_body_bytes", c.limits.max_body_bytes);
+  limits.read("max_upload_bytes", c.limits.max_upload_bytes);
+  limits.read("max_ui_bytes", c.limits.max_ui_bytes);
+  limits.read("max_json_depth", c.limits.max_json_depth);
+  limits.read("max_request_seconds", c.limits.max_request_seconds);
+  limits.finish();
+
+  Section render(root, "render", source);
+  render.read("default_scene", c.render.scene);
+  render.read("default_width", c.render.width);
+  render.read("default_height", c.render.height);
+  render.read("default_samples", c.render.samples);
+  render.finish();
+
+  Section log(root, "log", source);
+  log.read("level", c.log.level);
+  log.read("access_log", c.log.access_log);
+  log.finish();
+
+  validate_config(c);
+  return c;
+}
+
+Config load_config(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw HdrdError(make_error("config.not_found", "cannot read config file " + file.string(), "config"));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parse_config(ss.str(), file.string());
+}
+
+void validate_config(const Config& c) {
+  auto need = [&](bool ok, const std::string& key, const std::string& why) {
+    if (!ok) throw HdrdError(make_error("config.invalid", fmt::format("{}: {} {}", c.source.string(), key, why), key));
+  };
+  need(c.server.socket_mode <= 0777, "server.socket_mode", "must be at most 0777");
+  need((c.server.socket_mode & 0007) == 0, "server.socket_mode", "must not grant access to others (only owner and group)");
+  need(c.server.connection_timeout_s >= 1, "server.connection_timeout_s", "must be >= 1");
+  need(c.server.max_connections >= 1, "server.max_connections", "must be >= 1");
+  need(c.server.http_threads >= 1 && c.server.http_threads <= 64, "server.http_threads", "must be 1..64");
+  need(c.workers.render_workers >= 1 && c.workers.render_workers <= 64, "workers.render_workers", "must be 1..64");
+  need(c.workers.encode_threads >= 1 && c.workers.encode_threads <= 256, "workers.encode_threads", "must be 1..256");
+  need(c.workers.queue_depth >= 0, "workers.queue_depth", "must be >= 0");
+  static const std::set<std::string> kBackends = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
+  need(kBackends.count(c.workers.backend) > 0, "workers.backend",
+       "must be auto, egl, egl-device, egl-surfaceless or osmesa");
+  const auto& l = c.limits;
+  need(l.max_width >= 1 && l.max_width <= kMaxImageDimension, "limits.max_width",
+       fmt::format("must be 1..{}", kMaxImageDimension));
+  need(l.max_height >= 1 && l.max_height <= kMaxImageDimension, "limits.max_height",
+       fmt::format("must be 1..{}", kMaxImageDimension));
+  need(l.max_pixels >= 1 && l.max_pixels <= kMaxImagePixels, "limits.max_pixels",
+       fmt::format("must be 1..{}", kMaxImagePixels));
+  need(l.max_samples >= 1, "limits.max_samples", "must be >= 1");
+  need(l.max_body_bytes >= 1024, "limits.max_body_bytes", "must be >= 1024");
+  need(l.max_upload_bytes >= 1024, "limits.max_upload_bytes", "must be >= 1024");
+  need(l.max_json_depth >= 4 && l.max_json_depth <= 256, "limits.max_json_depth", "must be 4..256");
+  need(l.max_request_seconds > 0, "limits.max_request_seconds", "must be > 0");
+  need(c.render.width >= 1 && c.render.width <= l.max_width, "render.default_width", "must be within limits.max_width");
+  need(c.render.height >= 1 && c.render.height <= l.max_height, "render.default_height",
+       "must be within limits.max_height");
+  need(std::int64_t(c.render.width) * c.render.height <= l.max_pixels, "render.default_width",
+       "x default_height exceeds limits.max_pixels");
+  need(c.render.samples >= 1 && c.render.samples <= l.max_samples, "render.default_samples",
+       "must be within limits.max_samples");
+  static const std::set<std::string> kLevels = {"trace", "debug", "info", "warn", "error", "critical", "off"};
+  need(kLevels.count(c.log.level) > 0, "log.level", "must be one of trace, debug, info, warn, error, critical, off");
+  if (!c.server.tcp_listen.empty())
+    need(!c.server.token.empty() || !c.server.token_file.empty(), "server.tcp_listen",
+         "needs server.token or server.token_file (TCP requires a bearer token)");
+}
+
+nlohmann::json config_json(const Config& c) {
+  const auto& s = c.server;
+  const auto& w = c.workers;
+  const auto& l = c.limits;
+  return {
+      {"source", c.source.string()},
+      {"server",
+       {{"socket_path", s.socket_path.string()}, {"socket_mode", fmt::format("{:04o}", s.socket_mode)},
+        {"socket_group", s.socket_group}, {"systemd_activation", s.systemd_activation},
+        {"tcp_listen", s.tcp_listen}, {"tcp_allow_non_loopback", s.tcp_allow_non_loopback},
+        {"token", s.token.empty() ? "" : "(set)"}, {"token_file", s.token_file.string()},
+        {"connection_timeout_s", s.connection_timeout_s}, {"max_connections", s.max_connections},
+        {"http_threads", s.http_threads}, {"drain_timeout_s", s.drain_timeout_s}}},
+      {"workers",
+       {{"render_workers", w.render_workers}, {"encode_threads", w.encode_threads}, {"queue_depth", w.queue_depth},
+        {"backend", w.backend}, {"coalesce", w.coalesce}, {"retry_after_s", w.retry_after_s}}},
+      {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
+      {"limits",
+       {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},
+        {"max_samples", l.max_samples}, {"max_lights", l.max_lights}, {"max_body_bytes", l.max_body_bytes},
+        {"max_upload_bytes", l.max_upload_bytes}, {"max_ui_bytes", l.max_ui_bytes},
+        {"max_json_depth", l.max_json_depth}, {"max_request_seconds", l.max_request_seconds}}},
+      {"render",
+       {{"default_scene", c.render.scene}, {"default_width", c.render.width}, {"default_height", c.render.height},
+        {"default_samples", c.render.samples}}},
+      {"log", {{"level", c.log.level}, {"access_log", c.log.access_log}}},
+  };
+}
+
+}  // namespace hdrd::daemon

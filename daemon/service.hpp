@@ -1,0 +1,78 @@
+// The daemon as a whole: listeners, the HTTP transport, the scheduler with its render
+// workers, the endpoint table, configuration snapshots (SIGHUP swaps them) and the
+// orderly shutdown (SIGTERM: stop accepting, drain in-flight requests, stop).
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "daemon/config.hpp"
+#include "daemon/http_server.hpp"
+#include "daemon/metrics.hpp"
+#include "daemon/scheduler.hpp"
+
+namespace hdrd::daemon {
+
+class Service final : public HttpHandler {
+ public:
+  explicit Service(Config config);
+  ~Service() override;
+  Service(const Service&) = delete;
+  Service& operator=(const Service&) = delete;
+
+  // Binds (or inherits) the sockets, starts the render workers and the HTTP server.
+  // Throws HdrdError when a socket cannot be bound or MHD refuses to start.
+  void start();
+  // Applies what can change at run time (limits, roots, render defaults, log level,
+  // queue depth, access log); names what needs a restart in the log.
+  void reload(Config fresh);
+  // Stops accepting, drains in-flight requests within server.drain_timeout_s, stops.
+  void shutdown();
+
+  // Where the Unix socket is (empty when only inherited/TCP sockets are used).
+  std::string socket_description() const;
+  nlohmann::json status_json() const;
+
+  // HttpHandler
+  std::variant<std::size_t, Reply> begin(const HttpRequest& request) noexcept override;
+  void handle(HttpRequest& request, std::shared_ptr<Responder> responder) noexcept override;
+  void finished(const HttpRequest& request, const Reply& reply, std::size_t body_bytes) noexcept override;
+  void connection_opened(bool tcp, const std::optional<PeerCred>& peer) noexcept override;
+
+  struct Route;
+
+ private:
+  std::shared_ptr<const Config> config() const;
+  const Route* find_route(const HttpRequest& r, std::string* allow) const;
+
+  void get_status(HttpRequest&, std::shared_ptr<Responder>);
+  void get_capabilities(HttpRequest&, std::shared_ptr<Responder>);
+  void get_displays(HttpRequest&, std::shared_ptr<Responder>);
+  void get_metrics(HttpRequest&, std::shared_ptr<Responder>);
+  void post_render(HttpRequest&, std::shared_ptr<Responder>);
+  void post_encode(HttpRequest&, std::shared_ptr<Responder>);
+  // Admits a job and connects its reply, cancellation and deadline to the responder.
+  void submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Responder>& responder);
+
+  static const std::vector<Route>& routes();
+
+  mutable std::mutex config_mu_;
+  std::shared_ptr<const Config> config_;
+  std::string token_;
+  Metrics metrics_;
+  std::unique_ptr<Scheduler> scheduler_;
+  std::unique_ptr<HttpServer> server_;
+  std::vector<std::string> listener_descriptions_;
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  std::atomic<bool> shutting_down_{false};
+};
+
+// Sets spdlog's level from a name ("info", "debug", ...).
+void set_log_level(const std::string& level);
+
+}  // namespace hdrd::daemon
