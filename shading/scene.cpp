@@ -59,12 +59,15 @@ Result<void> validate_material(const Material& m, std::size_t i, std::size_t tex
 
 // Drops zero-area triangles (warning), rejects out-of-range indices and NaN attributes.
 Result<void> validate_mesh(Mesh& m, std::size_t i, std::vector<std::string>& warnings, std::int64_t& dropped) {
-  const std::string f = fmt::format("meshes[{}] '{}'", i, m.name);
-  if (m.indices.size() % 3 != 0) return scene_error(f, "index count is not a multiple of 3");
+  const std::string f = fmt::format("meshes[{}]", i);
+  const auto mesh_error = [&](const std::string& what) {
+    return make_error("scene.invalid", fmt::format("{} '{}': {}", f, m.name, what), f);
+  };
+  if (m.indices.size() % 3 != 0) return mesh_error("index count is not a multiple of 3");
   bool bad_normal = false;
   for (const Vertex& v : m.vertices) {
-    for (float x : v.position) if (!std::isfinite(x)) return scene_error(f, "has a non-finite position");
-    for (float x : v.uv) if (!std::isfinite(x)) return scene_error(f, "has a non-finite texture coordinate");
+    for (float x : v.position) if (!std::isfinite(x)) return mesh_error("has a non-finite position");
+    for (float x : v.uv) if (!std::isfinite(x)) return mesh_error("has a non-finite texture coordinate");
     const Vec3 n = v3(v.normal);
     if (!is_finite(n) || length(n) < 1e-12) bad_normal = true;
   }
@@ -73,17 +76,16 @@ Result<void> validate_mesh(Mesh& m, std::size_t i, std::vector<std::string>& war
   for (std::size_t t = 0; t < m.indices.size(); t += 3) {
     const std::uint32_t a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
     if (a >= m.vertices.size() || b >= m.vertices.size() || c >= m.vertices.size())
-      return scene_error(f, fmt::format("index {} is out of range ({} vertices)", std::max({a, b, c}),
-                                        m.vertices.size()));
+      return mesh_error(fmt::format("index {} is out of range ({} vertices)", std::max({a, b, c}), m.vertices.size()));
     const Vec3 pa = v3(m.vertices[a].position);
     if (length(cross(v3(m.vertices[b].position) - pa, v3(m.vertices[c].position) - pa)) <= 0) continue;
     kept.insert(kept.end(), {a, b, c});
   }
-  if (kept.empty()) return scene_error(f, "has no non-degenerate triangle");
+  if (kept.empty()) return mesh_error("has no non-degenerate triangle");
   dropped += static_cast<std::int64_t>((m.indices.size() - kept.size()) / 3);
   m.indices = std::move(kept);
   if (bad_normal) {
-    warnings.push_back(f + ": missing or zero normals recomputed from the triangles");
+    warnings.push_back(fmt::format("{} '{}': missing or zero normals recomputed from the triangles", f, m.name));
     compute_normals(m);
   }
   return {};
