@@ -111,7 +111,7 @@ class CubeParser {
 
   Result<CubeFile> run(std::string_view text) {
     std::size_t pos = 0;
-    while (pos <= text.size() && !failed_) {
+    while (pos < text.size() && !failed_) {
       const std::size_t nl = text.find('\n', pos);
       const std::size_t end = nl == std::string_view::npos ? text.size() : nl;
       ++line_;
@@ -329,7 +329,8 @@ class CubeParser {
     dst.insert(dst.end(), v.begin(), v.end());
   }
 
-  Result<CubeFile> finish(std::size_t text_size) {
+  Result<CubeFile> finish(std::size_t) {
+    line_ = std::max(line_, 1);
     if (!data_started_) {
       if (size1d_ == 0 && size3d_ == 0) {
         fail("cube.syntax", "no LUT_1D_SIZE or LUT_3D_SIZE: not a .cube file");

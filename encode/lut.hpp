@@ -178,6 +178,33 @@ Result<BakeResult> bake_tone_curve(const BakeRequest& request);
 BakeError measure_bake_error(const grade::Grade& baked, const ShaperSpec& shaper, int samples,
                              const std::function<std::array<double, 3>(std::array<double, 3>)>& reference_nits);
 
+// ---- Identity strip (encode/lut_png.cpp) ----------------------------------------------
+// Selan, "Using Lookup Tables to Accelerate Color Transformations", GPU Gems 2 ch. 24: the
+// lattice as N slices of N x N side by side, an N^2 x N image; pixel (x, y) holds lattice
+// point (r = x mod N, g = y, b = x div N). Any image editor can then grade it as a picture.
+inline constexpr int kMaxStripSize = 128;  // N^2 stays within 16384 pixels
+struct Strip {
+  int size = 0;
+  std::vector<std::uint16_t> rgb;  // N^2 * N pixels, 16-bit R, G, B, rows top-down
+};
+Strip identity_strip(int size);
+Lut3D lut_from_strip(const Strip& strip);  // samples / 65535
+// 16-bit RGB PNG with a tEXt chunk "hdrd-lut" holding `text` (size and shaper).
+Result<void> write_strip_png(const Strip& strip, const std::filesystem::path& path, const std::string& text);
+// Reads 8- or 16-bit RGB(A) PNGs (alpha dropped; an 8-bit file is a warning). `text`
+// receives the "hdrd-lut" chunk when the editor kept it.
+Result<Strip> read_strip_png(const std::filesystem::path& path, std::string* text, std::vector<std::string>* warnings);
+// A colour edit makes the strip a function of each pixel's own colour; a spatial edit
+// (blur, sharpen, resize) pulls the pixels at slice edges toward the neighbouring slice,
+// whose lattice colour is far away. `pull_*` is the mean move of R at the right (r = N-1)
+// and left (r = 0) slice edges toward the neighbour, beyond a linear extrapolation from
+// inside the slice; `noise` the mean |second difference| inside slices.
+struct SpatialEditCheck {
+  double pull_right = 0, pull_left = 0, noise = 0;
+  bool suspected = false;
+};
+SpatialEditCheck detect_spatial_edit(const Lut3D& lut);
+
 // ---- Fast application (encode/lut_apply.cpp) ------------------------------------------
 // A 3D table prepared for the SIMD kernel (Highway, dynamic dispatch: SSE4/AVX2/AVX-512
 // chosen at run time). Thread-safe to share; apply() splits work over std::threads.

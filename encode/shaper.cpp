@@ -170,9 +170,10 @@ float ShaperTable::BitTable::eval(float u, float at_one) const {
 
 ShaperTable::ShaperTable(const ShaperSpec& spec) : spec_(spec) {
   if (spec.kind != grade::Shaper::pq) return;
-  // Forward on u = x / max down to 2^-40 (PQ there is 4e-6 above PQ(0)); inverse on the
-  // signal down to 2^-21, below PQ(0) = 7.3e-7 where the EOTF is 0.
-  build(fwd_, -40, 8, [&](double u) { return transfer::pq_inverse_eotf(u * transfer::kPqPeakNits); });
+  // Forward on u = x / max down to 2^-60 (PQ there is 3e-7 above PQ(0), so the linear
+  // piece below it stays within the error budget); inverse on the signal down to 2^-21,
+  // below PQ(0) = 7.3e-7 where the EOTF is 0.
+  build(fwd_, -60, 9, [&](double u) { return transfer::pq_inverse_eotf(u * transfer::kPqPeakNits); });
   build(inv_, -21, 10, [&](double s) { return transfer::pq_eotf(s) / transfer::kPqPeakNits * spec.max; });
 }
 
