@@ -58,4 +58,9 @@ struct EncodedFrame {
   nlohmann::json settings = nlohmann::json::object();
 };
 
+// MaxCLL / MaxFALL measured by decoding the frame's own codes (REFERENCE.md §6):
+// hdr10 through the PQ EOTF, hlg through the BT.2100 EOTF at the target peak, scrgb as
+// the Rec.2020 signal it would be sent as. Zero for SDR modes.
+ContentLightLevel measure_content_light(const EncodedFrame& frame);
+
 }  // namespace hdrd

@@ -315,3 +315,20 @@ TEST(Encode, FusedKernelMatchesStagedPath) {
     }
 }
 }  // namespace
+
+namespace {
+TEST(Encode, MeasuredContentLightMatchesTheEncoder) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> lg(-3, 2);
+  Image img(64, 16);
+  for (auto& v : img.rgba) v = static_cast<float>(std::pow(10.0, lg(rng)));
+  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::scrgb}) {
+    const auto f = encode(img, settings(m, "pq-shoulder"));
+    const auto c = measure_content_light(f);
+    EXPECT_NEAR(c.max_cll_nits, f.content_light.max_cll_nits, 1e-3 * c.max_cll_nits) << to_string(m);
+    EXPECT_NEAR(c.max_fall_nits, f.content_light.max_fall_nits, 1e-3 * c.max_fall_nits) << to_string(m);
+    EXPECT_GT(c.max_cll_nits, c.max_fall_nits);
+    EXPECT_LE(c.max_cll_nits, f.target.peak_nits * 1.001);
+  }
+}
+}  // namespace
