@@ -56,7 +56,8 @@ int exr_threads() {
 // throw Iex::InputExc, as Imf::StdIFStream does at end of file.
 class MemoryIStream final : public Imf::IStream {
  public:
-  explicit MemoryIStream(std::span<const std::uint8_t> bytes) : Imf::IStream("<memory>"), bytes_(bytes) {}
+  MemoryIStream(std::span<const std::uint8_t> bytes, const std::string& name)
+      : Imf::IStream(name.c_str()), bytes_(bytes) {}
   bool isMemoryMapped() const override { return true; }
   char* readMemoryMapped(int n) override {
     const char* p = take(n);
@@ -286,9 +287,16 @@ Result<void> check_sampling(const Imf::ChannelList& list, const ChannelPlan& pla
 
 // ---- pixel reading ---------------------------------------------------------------------
 
+// Reads in bands of scan lines into storage reserved up front but zero-filled band by band,
+// so a file that declares a large image and then breaks costs memory only for what it
+// really decoded (found by tests/fuzz/exr_fuzz: 500-byte files declaring 1 GiB images).
 void read_planned(Imf::MultiPartInputFile& file, int part_index, const ChannelPlan& plan, Image& img) {
+  constexpr int kBandLines = 256;  // 8-16 chunks of the common compressions: keeps threads busy
   const Imath::Box2i dw = file.header(part_index).dataWindow();
-  char* base = reinterpret_cast<char*>(img.rgba.data());
+  const std::size_t row_floats = 4 * static_cast<std::size_t>(img.width);
+  img.rgba.clear();
+  img.rgba.reserve(row_floats * static_cast<std::size_t>(img.height));
+  char* base = reinterpret_cast<char*>(img.rgba.data());  // stable: capacity is reserved
   const std::size_t xs = 4 * sizeof(float), ys = xs * static_cast<std::size_t>(img.width);
   Imf::FrameBuffer fb;
   const auto add = [&](const std::string& channel, int slot) {
@@ -300,8 +308,11 @@ void read_planned(Imf::MultiPartInputFile& file, int part_index, const ChannelPl
   add(plan.alpha, 3);
   Imf::InputPart part(file, part_index);
   part.setFrameBuffer(fb);
-  part.readPixels(dw.min.y, dw.max.y);
-
+  for (int y0 = dw.min.y; y0 <= dw.max.y; y0 += kBandLines) {
+    const int y1 = std::min(dw.max.y, y0 + kBandLines - 1);
+    img.rgba.resize(row_floats * static_cast<std::size_t>(y1 - dw.min.y + 1));
+    part.readPixels(y0, y1);
+  }
   const bool grey = plan.kind == ChannelPlan::Kind::grey, opaque = plan.alpha.empty();
   for (std::size_t i = 0, n = img.pixel_count(); i < n; ++i) {
     float* p = img.rgba.data() + i * 4;
@@ -316,6 +327,7 @@ void read_luma_chroma(Imf::IStream& stream, const ChannelPlan& plan, const Imath
   stream.seekg(0);
   stream.clear();
   Imf::RgbaInputFile in(stream, plan.layer, exr_threads());
+  img.rgba.assign(img.pixel_count() * 4, 0.0f);
   std::vector<Imf::Rgba> px(img.pixel_count());
   // Slice::Make's trick: offset the base so that the data window's origin lands on px[0].
   const std::intptr_t offset =
@@ -361,7 +373,8 @@ Result<ExrImage> read_stream(Imf::IStream& stream, const std::string& name) {
     if (!planned) return planned.error();
     plan = std::move(planned.value());
     if (auto s = check_sampling(h.channels(), plan, name); !s) return s.error();
-    out.image = Image(static_cast<int>(w), static_cast<int>(ht));
+    out.image.width = static_cast<int>(w);
+    out.image.height = static_cast<int>(ht);
     if (plan.kind != ChannelPlan::Kind::luma_chroma) {
       read_planned(file, part, plan, out.image);
       return out;
@@ -398,36 +411,168 @@ color::Mat3 ExrImage::to_working() const {
   return color::rgb_to_rgb(chromaticities.value_or(color::kRec709), color::kRec2020);
 }
 
+namespace {
+
+// ---- header pre-scan -------------------------------------------------------------------
+// OpenEXR 3.1.5 allocates what a header declares before it checks the file holds it: an
+// attribute's size (a 60-byte file claiming a 1.8 GB attribute makes it allocate 1.8 GB),
+// and chunk offset tables sized from the data window and tile size (1x1 tiles over
+// 16384 x 8192 pixels: 1 GiB). Found by tests/fuzz/exr_fuzz. So the header is walked here
+// first (OpenEXR file layout: magic, version, then per part "name\0type\0" + i32 size +
+// value attributes ending in a 0 byte), and every declared size is checked against the
+// bytes actually present, and the data window against check_image_size, before OpenEXR
+// sees the file.
+
+class ByteReader {
+ public:
+  explicit ByteReader(std::span<const std::uint8_t> b) : b_(b) {}
+  std::size_t pos() const { return pos_; }
+  std::size_t left() const { return b_.size() - pos_; }
+  bool at_end() const { return pos_ >= b_.size(); }
+  std::uint8_t peek() const { return b_[pos_]; }
+  const char* here() const { return reinterpret_cast<const char*>(b_.data() + pos_); }
+  void skip(std::size_t n) { pos_ += n; }
+  // A 0-terminated string of at most max_len characters; nullopt when it runs past the end.
+  std::optional<std::string> cstring(std::size_t max_len) {
+    std::size_t end = pos_;
+    while (end < b_.size() && b_[end] != 0 && end - pos_ < max_len) ++end;
+    if (end >= b_.size() || b_[end] != 0) return std::nullopt;
+    std::string s(reinterpret_cast<const char*>(b_.data()) + pos_, end - pos_);
+    pos_ = end + 1;
+    return s;
+  }
+  std::int32_t i32_at(std::size_t at) const {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = (v << 8) | b_[at + static_cast<std::size_t>(i)];
+    return static_cast<std::int32_t>(v);
+  }
+
+ private:
+  std::span<const std::uint8_t> b_;
+  std::size_t pos_ = 0;
+};
+
+struct PartShape {
+  std::optional<std::array<std::int32_t, 4>> data_window;  // xmin, ymin, xmax, ymax
+  std::optional<std::array<std::int32_t, 2>> tile_size;
+  int compression = -1;
+  std::optional<std::int32_t> chunk_count;  // multi-part files state it
+  bool tiled = false;
+};
+
+// Scan lines per chunk for each compression (OpenEXR's ImfCompression.h numbering).
+std::int64_t lines_per_chunk(int compression) {
+  constexpr int kLines[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};
+  return compression >= 0 && compression < 10 ? kLines[compression] : 256;
+}
+
+// Lower bound of the chunk count (level 0 only for mip/rip maps; OpenEXR allocates at most
+// ~4x that), so requiring 8 bytes of offset table per chunk never rejects a valid file.
+std::int64_t min_chunks(const PartShape& p, std::int64_t w, std::int64_t h) {
+  if (p.chunk_count) return *p.chunk_count;
+  if (p.tiled && p.tile_size) {
+    const std::int64_t tx = (*p.tile_size)[0], ty = (*p.tile_size)[1];
+    if (tx <= 0 || ty <= 0) return 0;  // OpenEXR rejects it
+    return ((w + tx - 1) / tx) * ((h + ty - 1) / ty);
+  }
+  return (h + lines_per_chunk(p.compression) - 1) / lines_per_chunk(p.compression);
+}
+
+void note_attribute(const std::string& attr, const std::string& type, const ByteReader& r, std::int32_t size,
+                    PartShape& part) {
+  const std::size_t v = r.pos();
+  if (attr == "dataWindow" && type == "box2i" && size == 16)
+    part.data_window = std::array<std::int32_t, 4>{r.i32_at(v), r.i32_at(v + 4), r.i32_at(v + 8), r.i32_at(v + 12)};
+  else if (attr == "tiles" && type == "tiledesc" && size == 9)
+    part.tile_size = std::array<std::int32_t, 2>{r.i32_at(v), r.i32_at(v + 4)};
+  else if (attr == "compression" && type == "compression" && size == 1)
+    part.compression = r.peek();
+  else if (attr == "chunkCount" && type == "int" && size == 4)
+    part.chunk_count = r.i32_at(v);
+  else if (attr == "type" && type == "string")
+    part.tiled = std::string_view(r.here(), static_cast<std::size_t>(size)).find("tile") != std::string_view::npos;
+}
+
+// Walks one header's attributes; returns an error text, or "" when the header is sound.
+std::string scan_attributes(ByteReader& r, std::size_t max_name, PartShape& part) {
+  while (true) {
+    if (r.at_end()) return "truncated header";
+    if (r.peek() == 0) {
+      r.skip(1);
+      return "";
+    }
+    const auto attr = r.cstring(max_name);
+    const auto type = attr ? r.cstring(max_name) : std::nullopt;
+    if (!attr || !type || r.left() < 4) return "truncated or malformed header attribute";
+    const std::int32_t size = r.i32_at(r.pos());
+    r.skip(4);
+    if (size < 0 || static_cast<std::size_t>(size) > r.left())
+      return fmt::format("attribute '{}' claims {} bytes but only {} remain in the file", *attr, size, r.left());
+    note_attribute(*attr, *type, r, size, part);
+    r.skip(static_cast<std::size_t>(size));
+  }
+}
+
+Result<void> prescan_header(std::span<const std::uint8_t> bytes, const std::string& name) {
+  if (bytes.size() < 8) return exr_error(name, "exr.truncated", "truncated file (no version field)");
+  ByteReader r(bytes);
+  const std::int32_t version = r.i32_at(4);
+  const bool multipart = version & 0x1000, long_names = version & 0x400;
+  r.skip(8);
+  std::vector<PartShape> parts;
+  do {
+    PartShape part;
+    part.tiled = !multipart && (version & 0x200);
+    if (auto problem = scan_attributes(r, long_names ? 255 : 31, part); !problem.empty())
+      return exr_error(name, problem.find("truncated") == 0 ? "exr.truncated" : "exr.corrupt", problem);
+    parts.push_back(part);
+  } while (multipart && !r.at_end() && r.peek() != 0 && parts.size() < 1024);
+  if (multipart && !r.at_end()) r.skip(1);  // the empty header that ends the list
+  std::int64_t chunks = 0;
+  for (const PartShape& p : parts) {
+    if (!p.data_window) continue;  // OpenEXR reports the missing attribute
+    const auto& d = *p.data_window;
+    const std::int64_t w = std::int64_t{d[2]} - d[0] + 1, h = std::int64_t{d[3]} - d[1] + 1;
+    if (auto size = check_image_size(w, h); !size) return exr_error(name, "exr.size", size.error().message);
+    chunks += std::max<std::int64_t>(min_chunks(p, w, h), 0);
+  }
+  if (chunks > static_cast<std::int64_t>(r.left() / 8))
+    return exr_error(name, "exr.truncated",
+                     fmt::format("truncated file (the header needs {} chunk offsets, {} bytes remain)", chunks, r.left()));
+  return {};
+}
+
+Result<ExrImage> read_exr_bytes(std::span<const std::uint8_t> bytes, const std::string& name) {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
+    return exr_error(name, "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
+  if (auto ok = prescan_header(bytes, name); !ok) return ok.error();
+  exr_threads();
+  MemoryIStream stream(bytes, name);
+  return read_guarded(stream, name);
+}
+
+}  // namespace
+
+// The whole file is read into memory first: the header pre-scan needs the file size and
+// the compressed file is small next to the decoded float image.
 Result<ExrImage> read_exr(const fs::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return make_error("exr.missing", fmt::format("cannot read EXR {}: no such file", name));
   if (fs::is_directory(path, ec))
     return make_error("exr.unreadable", fmt::format("cannot read EXR {}: is a directory", name));
+  const auto size = fs::file_size(path, ec);
   std::ifstream file(path, std::ios::binary);
-  if (!file) return make_error("exr.unreadable", fmt::format("cannot read EXR {}: cannot open the file", name));
-  std::array<char, 4> magic{};
-  file.read(magic.data(), magic.size());
-  if (file.gcount() != 4 || std::memcmp(magic.data(), kExrMagic.data(), 4) != 0)
-    return exr_error(name, "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
-  file.seekg(0);
-  exr_threads();
-  try {
-    Imf::StdIFStream stream(file, name.c_str());
-    return read_guarded(stream, name);
-  } catch (const std::exception& e) {
-    return exr_error(name, "exr.unreadable", e.what());
-  }
+  if (ec || !file) return make_error("exr.unreadable", fmt::format("cannot read EXR {}: cannot open the file", name));
+  if (size > (std::uintmax_t{4} << 30))
+    return exr_error(name, "exr.size", fmt::format("file is {} bytes; the limit is 4 GiB", size));
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  if (!file.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
+    return make_error("exr.unreadable", fmt::format("cannot read EXR {}: read failed", name));
+  return read_exr_bytes(bytes, name);
 }
 
-Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes) {
-  const std::string name = "<memory>";
-  if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
-    return exr_error(name, "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
-  exr_threads();
-  MemoryIStream stream(bytes);
-  return read_guarded(stream, name);
-}
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes) { return read_exr_bytes(bytes, "<memory>"); }
 
 // ---- writing ---------------------------------------------------------------------------
 
