@@ -13,7 +13,7 @@ struct GpuPass::State {
   GlName program, vao, ubo, target, fbo, image_input;
   std::vector<std::pair<GlName, GLenum>> textures;  // texture, target (unit = index + 1)
   std::vector<GLint> sampler_locations;
-  GLint scene_location = -1, scale_location = -1;
+  GLint scene_location = -1, scale_location = -1, height_location = -1;
   PassOutput output = PassOutput::rgba32f;
   std::size_t block_size = 0;
   int target_width = 0, target_height = 0;
@@ -35,6 +35,9 @@ OutputFormat output_format(PassOutput o) {
     case PassOutput::rgba16f_bits: return {GL_RGBA16UI, GL_RGBA_INTEGER, GL_UNSIGNED_SHORT, "layout(location = 0) out uvec4 hdrd_out;\n"};
     case PassOutput::rgb10a2ui: return {GL_RGB10_A2UI, GL_RGBA_INTEGER, GL_UNSIGNED_INT_2_10_10_10_REV, "layout(location = 0) out uvec4 hdrd_out;\n"};
     case PassOutput::rgba8ui: return {GL_RGBA8UI, GL_RGBA_INTEGER, GL_UNSIGNED_BYTE, "layout(location = 0) out uvec4 hdrd_out;\n"};
+    case PassOutput::r32ui: return {GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, "layout(location = 0) out uvec4 hdrd_out;\n"};
+    case PassOutput::rg32ui: return {GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, "layout(location = 0) out uvec4 hdrd_out;\n"};
+    case PassOutput::rgba32ui: return {GL_RGBA32UI, GL_RGBA_INTEGER, GL_UNSIGNED_INT, "layout(location = 0) out uvec4 hdrd_out;\n"};
     case PassOutput::rgba32f: break;
   }
   return {GL_RGBA32F, GL_RGBA, GL_FLOAT, "layout(location = 0) out vec4 hdrd_out;\n"};
@@ -44,6 +47,8 @@ constexpr const char* kPassHeader = R"(
 in vec2 v_uv;
 uniform sampler2D hdrd_scene;
 uniform float hdrd_scene_scale;
+uniform int hdrd_height;
+ivec2 hdrd_pixel() { return ivec2(int(gl_FragCoord.x), hdrd_height - 1 - int(gl_FragCoord.y)); }
 // Codes computed here, not by the UNORM store (llvmpipe's is not exact round-to-nearest).
 uvec4 hdrd_quantize(vec4 v, float max_code) { return uvec4(clamp(v, 0.0, 1.0) * max_code + 0.5); }
 // packHalf2x16 rounds to nearest even (llvmpipe's float->half store rounds toward zero).
@@ -112,14 +117,17 @@ std::size_t bytes_per_pixel(PassOutput o) {
     case PassOutput::rgba32f: return 16;
     case PassOutput::rgba16f_bits: return 8;
     case PassOutput::rgb10a2ui:
-    case PassOutput::rgba8ui: return 4;
+    case PassOutput::rgba8ui:
+    case PassOutput::r32ui: return 4;
+    case PassOutput::rg32ui: return 8;
+    case PassOutput::rgba32ui: return 16;
   }
   return 16;
 }
 
-std::uint32_t PassResult::word(std::size_t pixel) const {
+std::uint32_t PassResult::word(std::size_t pixel, int index) const {
   std::uint32_t w;
-  std::memcpy(&w, bytes.data() + pixel * 4, 4);
+  std::memcpy(&w, bytes.data() + pixel * bytes_per_pixel(format) + index * 4, 4);
   return w;
 }
 
@@ -168,6 +176,7 @@ Result<std::unique_ptr<GpuPass>> GpuPass::compile(Renderer& renderer, const Pass
   }
   state->scene_location = gl.GetUniformLocation(state->program.id(), "hdrd_scene");
   state->scale_location = gl.GetUniformLocation(state->program.id(), "hdrd_scene_scale");
+  state->height_location = gl.GetUniformLocation(state->program.id(), "hdrd_height");
   state->vao = gen_vertex_array(gl);
   if (p.block_size > 0) {
     state->ubo = gen_buffer(gl);
@@ -195,6 +204,41 @@ Result<void> ensure_target(const GlApi& gl, GpuPass::State& s, int w, int h) {
   return {};
 }
 
+// GLES guarantees only RGBA_INTEGER + UNSIGNED_INT for integer colour buffers (ES 3.2
+// §16.1.2): read that and pack it into the output's layout. Desktop GL reads it directly.
+void read_pixels(const GlApi& gl, PassOutput o, int w, int h, std::uint8_t* dst) {
+  const OutputFormat f = output_format(o);
+  if (!gl.gles || o == PassOutput::rgba32f || o == PassOutput::rgba32ui) {
+    gl.ReadPixels(0, 0, w, h, f.format, f.type, dst);
+    return;
+  }
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  std::vector<std::uint32_t> v(n * 4);
+  gl.ReadPixels(0, 0, w, h, GL_RGBA_INTEGER, GL_UNSIGNED_INT, v.data());
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t* p = v.data() + i * 4;
+    switch (o) {
+      case PassOutput::rgba16f_bits:
+        for (int c = 0; c < 4; ++c) {
+          const auto h16 = static_cast<std::uint16_t>(p[c]);
+          std::memcpy(dst + i * 8 + c * 2, &h16, 2);
+        }
+        break;
+      case PassOutput::rgb10a2ui: {
+        const std::uint32_t word = (p[0] & 0x3ffu) | ((p[1] & 0x3ffu) << 10) | ((p[2] & 0x3ffu) << 20) | (p[3] << 30);
+        std::memcpy(dst + i * 4, &word, 4);
+        break;
+      }
+      case PassOutput::rgba8ui:
+        for (int c = 0; c < 4; ++c) dst[i * 4 + c] = static_cast<std::uint8_t>(p[c]);
+        break;
+      case PassOutput::r32ui: std::memcpy(dst + i * 4, p, 4); break;
+      case PassOutput::rg32ui: std::memcpy(dst + i * 8, p, 8); break;
+      default: break;
+    }
+  }
+}
+
 Result<PassResult> execute(const GlApi& gl, GpuPass::State& s, GLuint input, int w, int h, double scale,
                            std::span<const std::byte> uniforms) {
   if (uniforms.size() != s.block_size)
@@ -212,6 +256,7 @@ Result<PassResult> execute(const GlApi& gl, GpuPass::State& s, GLuint input, int
   gl.BindTexture(GL_TEXTURE_2D, input);
   gl.Uniform1i(s.scene_location, 0);
   gl.Uniform1f(s.scale_location, static_cast<float>(scale));
+  gl.Uniform1i(s.height_location, h);
   for (std::size_t i = 0; i < s.textures.size(); ++i) {
     gl.ActiveTexture(GL_TEXTURE1 + static_cast<GLenum>(i));
     gl.BindTexture(s.textures[i].second, s.textures[i].first.id());
@@ -235,8 +280,7 @@ Result<PassResult> execute(const GlApi& gl, GpuPass::State& s, GLuint input, int
   out.bytes.resize(row * h);
   gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  const OutputFormat f = output_format(s.output);
-  gl.ReadPixels(0, 0, w, h, f.format, f.type, out.bytes.data());
+  read_pixels(gl, s.output, w, h, out.bytes.data());
   std::vector<std::uint8_t> tmp(row);
   for (int y = 0; y < h / 2; ++y) {  // GL rows are bottom-up
     std::uint8_t* a = out.bytes.data() + static_cast<std::size_t>(y) * row;

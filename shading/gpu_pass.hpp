@@ -10,6 +10,7 @@
 //   in vec2 v_uv;                                   // [0,1]^2, bottom-up
 //   uniform sampler2D hdrd_scene;                   // the frame; texelFetch(ivec2(gl_FragCoord.xy))
 //   uniform float hdrd_scene_scale;                 // times a texel = absolute cd/m2 (undoes pre-exposure)
+//   ivec2 hdrd_pixel()                              // this pixel, rows top-down (as read back)
 //   out vec4 hdrd_out;  (rgba32f)  or  out uvec4 hdrd_out;  (integer outputs)
 //   uvec4 hdrd_quantize(vec4 v, float max_code)     // uint(clamp(v,0,1) * max_code + 0.5)
 //   uint  hdrd_half_bits(float v)                   // packHalf2x16: round to nearest even
@@ -37,6 +38,9 @@ enum class PassOutput {
   rgba16f_bits, // GL_RGBA16UI holding half-float bits (hdrd_half_bits), 8 bytes: ABGR16161616F
   rgb10a2ui,    // GL_RGB10_A2UI, packed little-endian R in bits 0-9: XBGR2101010
   rgba8ui,      // GL_RGBA8UI, 4 bytes in R, G, B, A order
+  r32ui,        // GL_R32UI: one 32-bit word the shader packs itself (a DRM pixel)
+  rg32ui,       // GL_RG32UI: two words (e.g. two packHalf2x16 = ABGR16161616F)
+  rgba32ui,     // GL_RGBA32UI: four words
 };
 std::size_t bytes_per_pixel(PassOutput o);
 
@@ -67,7 +71,7 @@ struct PassResult {
   double gpu_ms = 0;
   double readback_ms = 0;
   const float* floats() const { return reinterpret_cast<const float*>(bytes.data()); }
-  std::uint32_t word(std::size_t pixel) const;  // rgb10a2ui / rgba8ui: the 32-bit pixel
+  std::uint32_t word(std::size_t pixel, int index = 0) const;  // 32-bit word `index` of a pixel (all but float/half)
   std::uint16_t half(std::size_t pixel, int channel) const;  // rgba16f_bits
 };
 

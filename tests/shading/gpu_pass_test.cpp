@@ -234,5 +234,53 @@ void main() { hdrd_out = gain + offset; }
   EXPECT_NE(out.error().message.find("16 uniform bytes given"), std::string::npos) << out.error().message;
 }
 
+TEST(GpuPass, IntegerReadbackOnGlesMatchesDesktop) {
+  HDRD_REQUIRE_RENDERER(renderer);
+  // GLES reads integer targets only as RGBA_INTEGER/UNSIGNED_INT: the pass repacks them.
+  auto gles = Renderer::create(ContextOptions{Backend::egl, GlFlavor::gles});
+  auto desktop = Renderer::create(ContextOptions{Backend::egl, GlFlavor::desktop});
+  if (!gles || !desktop) GTEST_SKIP() << "needs GLES 3.2 and GL 4.5 core";
+  Image img(40, 30);
+  for (std::size_t i = 0; i < img.rgba.size(); ++i) img.rgba[i] = float(i % 997) / 996.0f;
+  const PassOutput outputs[] = {PassOutput::rgb10a2ui, PassOutput::rgba16f_bits, PassOutput::rgba8ui,
+                                PassOutput::r32ui, PassOutput::rg32ui, PassOutput::rgba32ui};
+  for (PassOutput o : outputs) {
+    PassProgram p;
+    p.name = "repack";
+    p.block_name.clear();
+    p.output = o;
+    p.fragment_source = R"(
+void main() {
+  vec4 v = texelFetch(hdrd_scene, ivec2(gl_FragCoord.xy), 0);
+  uvec4 q = hdrd_quantize(v, 1023.0);
+  ivec2 px = hdrd_pixel();
+  hdrd_out = uvec4(q.r | (q.g << 10) | (uint(px.y) << 20), hdrd_half_bits(v.g), q.b & 255u, q.a & 3u);
+}
+)";
+    std::vector<std::uint8_t> bytes[2];
+    int k = 0;
+    for (auto* r : {gles->get(), desktop->get()}) {
+      auto pass = GpuPass::compile(*r, p);
+      ASSERT_TRUE(pass.ok()) << pass.error().message;
+      auto out = (*pass)->run_on_image(img, {});
+      ASSERT_TRUE(out.ok()) << out.error().message;
+      bytes[k++] = out->bytes;
+    }
+    EXPECT_EQ(bytes[0], bytes[1]) << "output " << int(o);
+  }
+  // hdrd_pixel() counts rows top-down: the first row read back is row 0.
+  PassProgram p;
+  p.name = "rows";
+  p.block_name.clear();
+  p.output = PassOutput::r32ui;
+  p.fragment_source = "void main() { hdrd_out = uvec4(uint(hdrd_pixel().y), 0u, 0u, 0u); }\n";
+  auto pass = GpuPass::compile(**gles, p);
+  ASSERT_TRUE(pass.ok());
+  auto out = (*pass)->run_on_image(img, {});
+  ASSERT_TRUE(out.ok());
+  EXPECT_EQ(out->word(0), 0u);
+  EXPECT_EQ(out->word(img.pixel_count() - 1), 29u);
+}
+
 }  // namespace
 }  // namespace hdrd::shading
