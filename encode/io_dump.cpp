@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <random>
 
 #include <fcntl.h>
@@ -313,6 +314,7 @@ Result<std::vector<std::uint8_t>> dump_exr_bytes(const EncodedFrame& frame) {
   options.chromaticities = frame.target.container();
   options.white_luminance = white;
   options.attributes = exr_attributes(frame);
+  options.compression = "piz";  // lossless, about twice as fast as zip for 4K half (platform notes §4)
   return encode_exr(scaled, options);
 }
 
@@ -343,14 +345,19 @@ Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbas
   for (DumpFormat f : formats.empty() ? default_formats(frame.target.mode) : formats)
     if (std::find(wanted.begin(), wanted.end(), f) == wanted.end()) wanted.push_back(f);
 
-  // Encode everything in memory first: a format that cannot be produced fails before any
-  // file is touched.
+  // Encode everything in memory first, the formats concurrently (libpng is single-threaded),
+  // so that a format that cannot be produced fails before any file is touched.
+  std::vector<std::future<Result<std::vector<std::uint8_t>>>> jobs;
+  for (DumpFormat f : wanted)
+    jobs.push_back(std::async(std::launch::async, [&frame, f] { return dump_bytes(frame, f); }));
   std::vector<std::pair<DumpFormat, std::vector<std::uint8_t>>> encoded;
-  for (DumpFormat f : wanted) {
-    auto bytes = dump_bytes(frame, f);
-    if (!bytes) return bytes.error();
-    encoded.emplace_back(f, std::move(bytes.value()));
+  std::optional<Error> failure;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    auto bytes = jobs[i].get();
+    if (!bytes && !failure) failure = bytes.error();
+    if (bytes) encoded.emplace_back(wanted[i], std::move(bytes.value()));
   }
+  if (failure) return *failure;
   DumpResult result;
   std::map<std::string, std::string> names;  // relative to the sidecar's directory
   for (const auto& [f, bytes] : encoded) {
