@@ -18,10 +18,9 @@
 #include "encode/tonemap.hpp"
 
 #include "daemon/render_worker.hpp"
-// Wired once display/profile.hpp is published (see docs/api.md, "displays").
-#if defined(HDRD_DISPLAY_PROFILE_WIRED)
-#include "display/profile.hpp"
-#define HDRD_HAVE_DISPLAY_PROFILE 1
+#if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
+#include "display/displays.hpp"
+#define HDRD_HAVE_DISPLAYS 1
 #endif
 
 #ifndef HDRD_DAEMON_VERSION
@@ -367,17 +366,16 @@ void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responde
 }
 
 void Service::get_displays(HttpRequest&, std::shared_ptr<Responder> responder) {
-#ifdef HDRD_HAVE_DISPLAY_PROFILE
-  json list = json::array();
-  std::string note;
-  auto p = display::auto_profile();
-  if (p) list.push_back(display::profile_json(*p));
-  else note = p.error().message;
-  json j = {{"displays", list}};
-  if (!note.empty()) j["note"] = note;
+#ifdef HDRD_HAVE_DISPLAYS
+  auto overrides = display::load_default_overrides();
+  const auto report = display::enumerate_displays(overrides ? *overrides : std::vector<display::ProfileOverride>{});
+  json j = display::to_json(report);
+  if (!overrides) j["override_error"] = overrides.error().message;
+  if (auto chosen = display::choose_auto_profile(report)) j["auto"] = display::profile_to_json(*chosen);
+  else j["auto"] = nullptr;
   responder->reply(json_reply(j));
 #else
-  responder->reply(json_reply({{"displays", json::array()},
+  responder->reply(json_reply({{"connectors", json::array()},
                                {"note", "display queries are not available in this build (hdrd_display)"}}));
 #endif
 }

@@ -47,7 +47,7 @@ class Section {
     } else if constexpr (std::is_integral_v<T>) {
       if (!n->is_integer()) config_fail(where(source_, *n), full + " must be an integer", full);
       const auto v = n->value<std::int64_t>().value();
-      if (v < 0 || v > std::int64_t(std::numeric_limits<T>::max()))
+      if (v < 0 || std::uint64_t(v) > std::uint64_t(std::numeric_limits<T>::max()))
         config_fail(where(source_, *n), fmt::format("{} = {} is out of range", full, v), full);
       out = T(v);
     } else if constexpr (std::is_floating_point_v<T>) {

@@ -9,10 +9,9 @@
 #include "encode/io.hpp"
 #include "encode/transfer.hpp"
 
-// Wired once display/profile.hpp is published (see docs/api.md, "displays").
-#if defined(HDRD_DISPLAY_PROFILE_WIRED)
-#include "display/profile.hpp"
-#define HDRD_HAVE_DISPLAY_PROFILE 1
+#if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
+#include "display/displays.hpp"
+#define HDRD_HAVE_DISPLAYS 1
 #endif
 
 namespace hdrd::daemon {
@@ -124,27 +123,37 @@ Result<OutputKind> negotiate_output(const std::string* accept, Mode mode, bool d
 
 Result<DisplayTarget> resolve_display(const DisplaySpec& spec, std::vector<std::string>* warnings) {
   if (!spec.auto_detect && spec.edid_path.empty()) return spec.target;
-#ifdef HDRD_HAVE_DISPLAY_PROFILE
-  auto profile = spec.edid_path.empty() ? display::auto_profile() : display::profile_from_edid_file(spec.edid_path);
+#ifdef HDRD_HAVE_DISPLAYS
+  auto profile = display::select_profile(spec.edid_path.empty() ? "auto" : "", spec.edid_path.string());
   if (!profile) {
     Error e = profile.error();
-    if (spec.auto_detect && spec.edid_path.empty()) e.code = "display.unavailable";
+    if (e.field.empty()) e.field = spec.edid_path.empty() ? "display" : "display.edid";
     return e;
   }
-  DisplayTarget t = display::apply_profile(*profile, default_target(spec.target.mode));
-  // The request's explicit values win over the display's.
+  const auto has = [&](std::string_view f) { return std::find(spec.given.begin(), spec.given.end(), f) != spec.given.end(); };
   const DisplayTarget& req = spec.target;
-  for (const auto& f : spec.given) {
-    if (f == "peak_nits") t.peak_nits = req.peak_nits;
-    else if (f == "black_nits") t.black_nits = req.black_nits;
-    else if (f == "paper_white_nits") t.paper_white_nits = req.paper_white_nits;
-    else if (f == "ui_white_nits") t.ui_white_nits = req.ui_white_nits;
-    else if (f == "sdr_white_nits") t.sdr_white_nits = req.sdr_white_nits;
-    else if (f == "range") t.range = req.range;
-    else if (f == "sdr_curve") t.sdr_curve = req.sdr_curve;
-    else if (f == "bits") t.bits = req.bits;
+  if (!*profile) {  // headless: nothing attached
+    if (warnings) warnings->push_back("display auto: no display attached; using the mode's defaults");
+    return req;
   }
-  if (auto ok = validate(t); !ok) return ok.error();
+  DisplayTarget t = default_target(has("mode") ? req.mode : (*profile)->mode);
+  display::apply_profile(**profile, t, !has("mode"));
+  // The request's explicit values win over the display's (REFERENCE.md §1.8 couplings kept).
+  if (has("peak_nits")) t.peak_nits = req.peak_nits;
+  if (has("black_nits")) t.black_nits = req.black_nits;
+  const bool sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
+  if (has("paper_white_nits")) t.paper_white_nits = req.paper_white_nits;
+  else if (sdr) t.paper_white_nits = t.peak_nits;
+  t.ui_white_nits = has("ui_white_nits") ? req.ui_white_nits : t.paper_white_nits;
+  t.sdr_white_nits = has("sdr_white_nits") ? req.sdr_white_nits : t.paper_white_nits;
+  if (has("range")) t.range = req.range;
+  if (has("sdr_curve")) t.sdr_curve = req.sdr_curve;
+  if (has("bits")) t.bits = req.bits;
+  if (auto ok = validate(t); !ok) {
+    Error e = ok.error();
+    e.code = "display.invalid";
+    return e;
+  }
   return t;
 #else
   (void)warnings;

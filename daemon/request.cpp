@@ -229,7 +229,7 @@ void parse_display(Fields& top, Request& r, const ParseContext& ctx) {
   const auto paper = f.number("paper_white_nits", 1e-3, 10000);
   const auto ui = f.number("ui_white_nits", 1e-3, 10000);
   const auto sdr = f.number("sdr_white_nits", 1e-3, 10000);
-  for (const char* k : {"peak_nits", "black_nits", "paper_white_nits", "ui_white_nits", "sdr_white_nits", "range",
+  for (const char* k : {"mode", "peak_nits", "black_nits", "paper_white_nits", "ui_white_nits", "sdr_white_nits", "range",
                         "sdr_curve", "bits"})
     if (f.has(k)) r.display.given.push_back(k);
   if (peak) t.peak_nits = *peak;
