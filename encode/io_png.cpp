@@ -95,11 +95,6 @@ std::vector<std::uint8_t> clli_for(const ContentLightLevel& l) {
 
 // ---- rows -------------------------------------------------------------------------------
 
-// BT.2100 Table 9 narrow range at 16 bits: D = round((219 E' + 16) * 2^8), E' = s / 65535.
-std::uint16_t narrow16(std::uint32_t s) {
-  return static_cast<std::uint16_t>((219ull * 256 * s + 16ull * 256 * 65535 + 65535 / 2) / 65535);
-}
-
 struct RowSource {
   const EncodedFrame* frame = nullptr;
   bool sixteen = false;
@@ -123,14 +118,13 @@ struct RowSource {
     }
   }
 
-  // round(E' * 65535) from signal16 when the encoder kept it; otherwise from the 10-bit
-  // code (full: E' = D/1023; narrow: the 16-bit narrow code is exactly D * 2^6).
+  // Full range: round(E' * 65535) from signal16 when the encoder kept it, else from the
+  // 10-bit code as round(D * 65535 / 1023). Narrow range: the 16-bit narrow code of
+  // BT.2100 Table 9, round((219 E' + 16) * 2^8), which for a 10-bit narrow code D is
+  // exactly D * 2^6; taken from the code so it never depends on how signal16 was scaled.
   std::uint16_t sample16(const std::uint8_t* src, int y, int x, int c) const {
     const auto& f = *frame;
-    if (!f.signal16.empty()) {
-      const std::uint16_t s = f.signal16[(static_cast<std::size_t>(y) * f.width + x) * 3 + c];
-      return narrow ? narrow16(s) : s;
-    }
+    if (!narrow && !f.signal16.empty()) return f.signal16[(static_cast<std::size_t>(y) * f.width + x) * 3 + c];
     std::uint32_t word;
     std::memcpy(&word, src + x * 4, 4);  // little-endian host (x86-64, arm64)
     const std::uint32_t code = (word >> (10 * c)) & 0x3ff;

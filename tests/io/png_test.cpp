@@ -137,16 +137,28 @@ TEST(PngWrite, ReadPngInfoDecodesTheSameThroughLibpng) {
 }
 
 TEST(PngWrite, NarrowRangeClearsTheFlagAndCodesSamplesNarrow) {
-  EncodedFrame f = ten_bit_frame(Mode::hdr10, 4, 2);
+  EncodedFrame f = ten_bit_frame(Mode::hdr10, 4, 2, 0);
   f.target.range = Range::narrow;
+  std::vector<long> codes;
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      std::uint32_t word = 0;
+      for (int c = 0; c < 3; ++c) {  // BT.2100 Table 9, 10-bit narrow: round((219 E' + 16) 4)
+        codes.push_back(std::lround((219 * signal_at(x, y, c) + 16) * 4));
+        word |= static_cast<std::uint32_t>(codes.back()) << (10 * c);
+      }
+      put_le32(f.data, y * f.stride_bytes + x * 4, word);
+    }
   const auto png = encode_png(f);
   ASSERT_TRUE(png.ok());
   EXPECT_EQ(find(pngtest::chunks_of(*png), "cICP")->data, (Bytes{9, 16, 0, 0}));
   const auto d = pngtest::decode_rgb(*png);
-  for (std::size_t i = 0; i < d.samples.size(); ++i) {
-    // BT.2100 Table 9 at 16 bits: round((219 E' + 16) 2^8), E' = signal16 / 65535.
-    const double e = f.signal16[i] / 65535.0;
-    EXPECT_EQ(d.samples[i], std::lround((219 * e + 16) * 256)) << i;
+  ASSERT_EQ(d.samples.size(), codes.size());
+  for (std::size_t i = 0; i < codes.size(); ++i) {
+    // The same formula at 16 bits, round((219 E' + 16) 2^8), is the 10-bit code x 64:
+    // black 64 -> 4096, white 940 -> 60160.
+    EXPECT_EQ(d.samples[i], codes[i] * 64) << i;
+    EXPECT_NEAR(d.samples[i], (219 * (f.signal16[i] / 65535.0) + 16) * 256, 0.5 * 64 + 1) << i;
   }
 }
 
