@@ -31,6 +31,9 @@ void run(const EncodeOptions& o) {
   settings.keep_display_nits = wants(io::DumpFormat::exr);
   settings.png_samples = wants(io::DumpFormat::png);
 
+  if (settings.exposure.mode == exposure::Mode::light && !settings.exposure.illuminance_lux)
+    throw CliError("--exposure-mode light needs --illuminance LUX for an EXR input (a render knows its sun)");
+
   auto t0 = std::chrono::steady_clock::now();
   auto exr = io::read_exr(o.input);
   if (!exr) throw HdrdError(exr.error());

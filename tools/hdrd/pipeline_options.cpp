@@ -118,6 +118,13 @@ EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_e
       fail("--tonemap-param", fmt::format("'{}' has no numeric value", kv));
     }
   }
+  // Fail before any work is done: unknown curves and out-of-range parameters.
+  if (!s.tone.curve.empty() || !s.tone.params.empty()) {
+    const auto name = s.tone.curve.empty() ? std::string(tonemap::default_curve(t.mode)) : s.tone.curve;
+    const auto* info = tonemap::find_curve(name);
+    if (!info) throw HdrdError(tonemap::prepare(name, {}).error());
+    if (auto r = tonemap::resolve_params(*info, s.tone.params); !r) throw HdrdError(r.error());
+  }
   if (!o.tonemap_apply.empty()) {
     s.tone.apply = tonemap::parse_apply(o.tonemap_apply);
     if (!s.tone.apply) fail("--tonemap-apply", fmt::format("'{}' is not per-channel, max-rgb or luminance", o.tonemap_apply));
