@@ -108,6 +108,8 @@ void choose_frame_average(const EdidInfo& e, bool block_usable, Profile& p) {
     const auto& h = *e.hdr_static_metadata;
     if (h.max_frame_avg_luminance_cv && *h.max_frame_avg_luminance_cv != 0) fall = h.max_frame_avg_luminance_cd_m2();
     else if (h.max_frame_avg_luminance_cv) p.notes.push_back("max frame-average luminance CV 0 (no data): ignored");
+  } else if (e.hdr_static_metadata && e.hdr_static_metadata->max_frame_avg_luminance_cv) {
+    p.notes.push_back("max frame-average luminance of the block whose max was ignored: ignored too");
   }
   if (!fall && e.displayid_parameters && e.displayid_parameters->max_full_cd_m2() > 0 &&
       std::isfinite(e.displayid_parameters->max_full_cd_m2())) {
@@ -116,7 +118,7 @@ void choose_frame_average(const EdidInfo& e, bool block_usable, Profile& p) {
   }
   if (!fall) {
     p.frame_average_nits = p.peak_nits;
-    if (p.is_hdr()) p.notes.push_back("no max frame-average luminance: frame-average = peak");
+    if (p.is_hdr()) p.notes.push_back("no usable max frame-average luminance: frame-average = peak");
     return;
   }
   if (*fall > p.peak_nits) {
