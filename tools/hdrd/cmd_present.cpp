@@ -6,9 +6,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "display/drm_device.hpp"
 #include "display/dump_reader.hpp"
-#include "display/kms_output.hpp"
+#include "display/presenter.hpp"
 #include "tools/hdrd/command.hpp"
 
 namespace hdrd::cli {
@@ -79,31 +78,15 @@ void run(const PresentCliOptions& o) {
 
   auto frame = read_dump(o.sidecar);
   if (!frame) throw HdrdError(frame.error());
-  const std::vector<std::string> devices = o.device.empty() ? drm_card_paths() : std::vector<std::string>{o.device};
-  if (devices.empty())
-    throw HdrdError(make_error("kms.no_display", "no display attached: this machine has no DRM devices (headless)"));
-
-  std::optional<Error> last;
-  for (const auto& path : devices) {
-    auto dev = DrmDevice::open(path);
-    if (!dev) throw HdrdError(dev.error());
-    KmsOutput output(**dev);
-    auto r = output.show(*frame, opt);
-    if (!r) {
-      if (r.error().code == "kms.no_display" || r.error().code == "kms.no_connector") {
-        last = r.error();
-        continue;  // try the next device
-      }
-      throw HdrdError(r.error());
-    }
-    print_out(o.common.json ? result_json(*r).dump(2) : result_text(*r));
-    if (r->committed && o.seconds > 0) {
-      progress("holding the frame for {:g} s", o.seconds);
-      std::this_thread::sleep_for(std::chrono::duration<double>(o.seconds));
-    }
-    return;  // closing the device releases the framebuffer
+  Presenter presenter;
+  auto r = presenter.show(*frame, opt, o.device);
+  if (!r) throw HdrdError(r.error());
+  print_out(o.common.json ? result_json(*r).dump(2) : result_text(*r));
+  if (r->committed && o.seconds > 0) {
+    progress("holding the frame for {:g} s", o.seconds);
+    std::this_thread::sleep_for(std::chrono::duration<double>(o.seconds));
   }
-  throw HdrdError(*last);
+  presenter.close();
 }
 
 void setup(CLI::App& root) {
