@@ -260,9 +260,13 @@ class CubeParser {
     }
     if (!check_domains()) return false;
     data_started_ = true;
+    set_expected();
+    return true;
+  }
+
+  void set_expected() {
     expected1d_ = static_cast<std::size_t>(size1d_);
     expected3d_ = static_cast<std::size_t>(size3d_) * size3d_ * size3d_;
-    return true;
   }
 
   bool check_domains() {
@@ -337,6 +341,7 @@ class CubeParser {
         return error_;
       }
       if (!check_domains()) return error_;
+      set_expected();  // a header without data: the count check below reports it
     }
     const std::size_t got = (entries1d_.size() + entries3d_.size()) / 3;
     if (got != expected1d_ + expected3d_) {

@@ -182,6 +182,7 @@ TEST(Cube, MalformedFilesGetLineNumberedErrors) {
       {"nan value", "LUT_3D_SIZE 2\n0 0 0\nnan 0 0\n", 3, "cube.value", "not finite"},
       {"inf value", "LUT_3D_SIZE 2\n0 0 0\n0 0 1e99\n", 3, "cube.value", "not finite"},
       {"keyword after data", "LUT_3D_SIZE 2\n0 0 0\nTITLE \"late\"\n", 3, "cube.syntax", "after the table data"},
+      {"header only", "LUT_1D_SIZE 3\n", 1, "cube.size", "file ends after 0 entries"},
       {"too few entries", "LUT_3D_SIZE 2\n" + table(7) + "\n# end\n", 10, "cube.size", "after 7 entries"},
       {"too many entries", "LUT_3D_SIZE 2\n" + table(9), 10, "cube.size", "more entries than declared"},
       {"too few 1D+3D", "LUT_1D_SIZE 3\nLUT_3D_SIZE 2\n" + table(10), 12, "cube.size", "declares 11"},
