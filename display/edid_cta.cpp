@@ -232,6 +232,10 @@ std::vector<CtaDataBlock> parse_cta_data_blocks(Bytes c, int block_index, const 
   std::vector<CtaDataBlock> blocks;
   std::size_t i = 0;
   while (i < c.size()) {
+    if (std::all_of(c.begin() + static_cast<std::ptrdiff_t>(i), c.end(), [](std::uint8_t v) { return v == 0; })) {
+      warn(info, "{}: {} byte(s) of zero padding in the data block collection", where, c.size() - i);
+      break;
+    }
     const int tag = c[i] >> 5;
     const std::size_t len = c[i] & 0x1f;
     if (i + 1 + len > c.size()) {

@@ -39,13 +39,15 @@ inline std::uint8_t byte_sum(Bytes b) {
 
 template <class... Args>
 void warn(EdidInfo& info, fmt::format_string<Args...> f, Args&&... args) {
-  // A hostile blob could produce thousands of identical complaints; keep the list readable.
+  // A hostile blob could produce thousands of complaints; keep the list readable: no
+  // exact repeats, and at most 64 entries.
   constexpr std::size_t kMaxWarnings = 64;
-  if (info.warnings.size() < kMaxWarnings) {
-    info.warnings.push_back(fmt::format(f, std::forward<Args>(args)...));
-  } else if (info.warnings.size() == kMaxWarnings) {
-    info.warnings.push_back("further warnings suppressed");
-  }
+  if (info.warnings.size() > kMaxWarnings) return;
+  std::string w = fmt::format(f, std::forward<Args>(args)...);
+  for (const auto& existing : info.warnings)
+    if (existing == w) return;
+  if (info.warnings.size() < kMaxWarnings) info.warnings.push_back(std::move(w));
+  else info.warnings.push_back("further warnings suppressed");
 }
 
 // 18-byte detailed timing descriptor (E-EDID 1.4 §3.10.2, Table 3.21).
