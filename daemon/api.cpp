@@ -421,6 +421,13 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
 #ifndef HDRD_HAVE_RENDERER
   responder->reply(Reply::error(make_error("renderer.unavailable", "renderer not available in this build")));
 #else
+  if (req->scene.kind == SceneSpec::Kind::builtin && !shading::is_builtin_scene(req->scene.name)) {
+    std::string names;
+    for (const auto& n : shading::builtin_scene_names()) names += (names.empty() ? "" : ", ") + n;
+    return responder->reply(Reply::error(
+        make_error("request.value", fmt::format("scene: no built-in scene '{}' (one of: {})", req->scene.name, names),
+                   "scene")));
+  }
   auto st = std::make_shared<RenderJobState>();
   st->request = std::move(*req);
   st->output = *output;
@@ -461,7 +468,13 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
     rq.load.limits.max_lights = st->config->limits.max_lights;
     const auto t0 = std::chrono::steady_clock::now();
     auto r = rr->renderer->render(rq);
-    if (!r) return r.error();
+    if (!r) {
+      Error e = r.error();
+      // Fields inside an inline scene are reported relative to the request.
+      if (q.scene.kind == SceneSpec::Kind::inline_json && !e.field.empty() && e.field.rfind("scene", 0) != 0)
+        e.field = "scene." + e.field;
+      return e;
+    }
     st->rendered = std::move(*r);
     st->render_s = seconds_since(t0);
     metrics->stage_time("render", st->render_s);

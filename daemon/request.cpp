@@ -471,6 +471,8 @@ Result<Request> parse_request(std::string_view body, const ParseContext& ctx) {
     doc = json::parse(body.begin(), body.end());
   } catch (const json::parse_error& e) {
     return make_error("request.syntax", fmt::format("request body is not valid JSON: {}", e.what()), "");
+  } catch (const json::exception& e) {  // out_of_range.406: a number beyond double's range
+    return make_error("request.value", fmt::format("request body has an unusable value: {}", e.what()), "");
   }
   if (!doc.is_object())
     return make_error("request.type", fmt::format("request: expected a JSON object, got {}", type_name(doc)), "");

@@ -48,6 +48,8 @@ constexpr StatusEntry kStatus[] = {
     {"pipeline.", 422},
     {"image.", 422},
     {"scene.", 422},
+    {"gltf.", 422},
+    {"camera.", 422},
     {"render.", 500},
 };
 

@@ -1,0 +1,193 @@
+"""Client for the hdrd daemon's HTTP API (docs/api.md), standard library only.
+
+    from hdrd_client import HdrdClient
+    c = HdrdClient()                      # $HDRD_SOCKET, $XDG_RUNTIME_DIR/hdrd.sock, /run/hdrd/hdrd.sock
+    frame = c.render({"width": 256, "height": 144, "display": {"mode": "hdr10", "peak_nits": 1000}})
+    open("frame.png", "wb").write(frame.data)
+    print(frame.metadata["maxcll"], frame.metadata["fourcc"])
+
+Errors from the daemon raise HdrdError with .status, .code, .message and .field.
+"""
+
+import http.client
+import json
+import os
+import socket
+import uuid
+
+__all__ = ["HdrdClient", "HdrdError", "Frame", "default_socket"]
+
+
+def default_socket():
+    """$HDRD_SOCKET, else $XDG_RUNTIME_DIR/hdrd.sock, else /run/hdrd/hdrd.sock."""
+    if os.environ.get("HDRD_SOCKET"):
+        return os.environ["HDRD_SOCKET"]
+    if os.environ.get("XDG_RUNTIME_DIR"):
+        return os.path.join(os.environ["XDG_RUNTIME_DIR"], "hdrd.sock")
+    return "/run/hdrd/hdrd.sock"
+
+
+class HdrdError(Exception):
+    """An error answer: {"error": {"code", "message", "field"}} with its HTTP status."""
+
+    def __init__(self, status, code, message, field=""):
+        super().__init__(f"{message} ({code}, HTTP {status})")
+        self.status = status
+        self.code = code
+        self.message = message
+        self.field = field
+
+
+class Frame:
+    """An encoded frame: the bytes, their media type and the X-Hdrd-* metadata
+    (keys lower-cased without the prefix: mode, fourcc, width, height, stride, maxcll, ...)."""
+
+    def __init__(self, data, content_type, metadata):
+        self.data = data
+        self.content_type = content_type
+        self.metadata = metadata
+
+    def __repr__(self):
+        m = self.metadata
+        return (f"Frame({m.get('mode')} {m.get('width')}x{m.get('height')} {m.get('fourcc')}, "
+                f"{self.content_type}, {len(self.data)} bytes)")
+
+
+class _UnixConnection(http.client.HTTPConnection):
+    def __init__(self, path, timeout):
+        super().__init__("localhost", timeout=timeout)
+        self._path = path
+
+    def connect(self):
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.settimeout(self.timeout)
+        s.connect(self._path)
+        self.sock = s
+
+
+class HdrdClient:
+    """One client, one (kept-alive) connection. Not thread-safe: use one per thread."""
+
+    def __init__(self, socket_path=None, tcp=None, token=None, timeout=300.0):
+        self.socket_path = socket_path or default_socket()
+        self.tcp = tcp          # "host:port" instead of the Unix socket
+        self.token = token      # bearer token, required over TCP
+        self.timeout = timeout
+        self._conn = None
+
+    # -- plumbing ------------------------------------------------------------------------
+    def _connection(self):
+        if self._conn is None:
+            if self.tcp:
+                host, port = self.tcp.rsplit(":", 1)
+                self._conn = http.client.HTTPConnection(host.strip("[]"), int(port), timeout=self.timeout)
+            else:
+                self._conn = _UnixConnection(self.socket_path, self.timeout)
+        return self._conn
+
+    def close(self):
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def request(self, method, path, body=None, headers=None):
+        """Sends one request; returns (status, headers dict lower-cased, body bytes)."""
+        headers = dict(headers or {})
+        if self.token:
+            headers["Authorization"] = "Bearer " + self.token
+        for attempt in (0, 1):
+            conn = self._connection()
+            try:
+                conn.request(method, path, body=body, headers=headers)
+                resp = conn.getresponse()
+                data = resp.read()
+                hdrs = {k.lower(): v for k, v in resp.getheaders()}
+                if hdrs.get("connection", "").lower() == "close":
+                    self.close()
+                return resp.status, hdrs, data
+            except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
+                self.close()  # the daemon closed an idle kept-alive connection: retry once
+                if attempt:
+                    raise
+        raise RuntimeError("unreachable")
+
+    @staticmethod
+    def _raise_for(status, data):
+        if status < 400:
+            return
+        try:
+            err = json.loads(data)["error"]
+            raise HdrdError(status, err.get("code", ""), err.get("message", ""), err.get("field", ""))
+        except (ValueError, KeyError, TypeError):
+            raise HdrdError(status, f"http.{status}", data[:200].decode("utf-8", "replace")) from None
+
+    def _get_json(self, path):
+        status, _, data = self.request("GET", path)
+        self._raise_for(status, data)
+        return json.loads(data)
+
+    @staticmethod
+    def _frame(headers, data):
+        meta = {k[len("x-hdrd-"):]: v for k, v in headers.items() if k.startswith("x-hdrd-")}
+        return Frame(data, headers.get("content-type", ""), meta)
+
+    # -- the API ------------------------------------------------------------------------
+    def status(self):
+        """GET /v1/status: version, uptime, renderer (backend, GL_RENDERER), queue, workers."""
+        return self._get_json("/v1/status")
+
+    def capabilities(self):
+        """GET /v1/capabilities: modes, tone curves with parameters, limits."""
+        return self._get_json("/v1/capabilities")
+
+    def displays(self):
+        """GET /v1/displays: connectors, EDID-derived profiles, the auto choice."""
+        return self._get_json("/v1/displays")
+
+    def metrics(self):
+        """GET /metrics: Prometheus text."""
+        status, _, data = self.request("GET", "/metrics")
+        self._raise_for(status, data)
+        return data.decode()
+
+    def render(self, request, accept="image/png"):
+        """POST /v1/render. `request` is the JSON body (a dict); `accept` picks
+        image/png, image/x-exr or application/octet-stream (raw DRM buffer)."""
+        status, headers, data = self.request(
+            "POST", "/v1/render", json.dumps(request),
+            {"Content-Type": "application/json", "Accept": accept})
+        self._raise_for(status, data)
+        return self._frame(headers, data)
+
+    def render_dump(self, request):
+        """POST /v1/render with "dump": true: the daemon writes the files into its dump
+        directory; returns the sidecar (paths under "files")."""
+        body = dict(request, dump=True)
+        status, _, data = self.request("POST", "/v1/render", json.dumps(body),
+                                       {"Content-Type": "application/json", "Accept": "application/json"})
+        self._raise_for(status, data)
+        return json.loads(data)
+
+    def encode(self, exr_bytes, options=None, accept="image/png"):
+        """POST /v1/encode: an OpenEXR file's bytes plus the same display/tone/exposure
+        options as render (sent as multipart/form-data: parts "image" and "request")."""
+        boundary = "hdrd-" + uuid.uuid4().hex
+        parts = [
+            (b'Content-Disposition: form-data; name="image"; filename="input.exr"\r\n'
+             b"Content-Type: image/x-exr\r\n\r\n", exr_bytes),
+            (b'Content-Disposition: form-data; name="request"\r\n'
+             b"Content-Type: application/json\r\n\r\n", json.dumps(options or {}).encode()),
+        ]
+        body = b"".join(b"--" + boundary.encode() + b"\r\n" + head + data + b"\r\n" for head, data in parts)
+        body += b"--" + boundary.encode() + b"--\r\n"
+        status, headers, data = self.request(
+            "POST", "/v1/encode", body,
+            {"Content-Type": "multipart/form-data; boundary=" + boundary, "Accept": accept})
+        self._raise_for(status, data)
+        return self._frame(headers, data)
