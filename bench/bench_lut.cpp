@@ -137,12 +137,9 @@ void BM_Grade_Display(benchmark::State& state) {
   grade::GradeSettings gs;
   gs.lut_path = f.path.string();
   const auto g = grade::load_grade(gs, 1000, nullptr).value();
-  std::vector<float> nits(f.input.size()), px(f.input.size());
-  for (std::size_t i = 0; i < nits.size(); ++i) nits[i] = from_half(f.input[i]) * 1000.0f;
-  for (auto _ : state) {
-    state.PauseTiming();
-    px = nits;
-    state.ResumeTiming();
+  std::vector<float> px(f.input.size());
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = from_half(f.input[i]) * 1000.0f;
+  for (auto _ : state) {  // regrading the graded frame: still display nits, same work
     for (int y = 0; y < kHeight; ++y) g->apply(px.data() + std::size_t(y) * kWidth * 4, kWidth);
     benchmark::DoNotOptimize(px.data());
   }

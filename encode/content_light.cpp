@@ -10,7 +10,8 @@ namespace hdrd {
 ContentLightLevel measure_content_light(const EncodedFrame& f) {
   const auto& t = f.target;
   if (t.mode != Mode::hdr10 && t.mode != Mode::hlg && t.mode != Mode::scrgb) return {};
-  const auto sig = detail::build_signal_stage(t);
+  const auto sig_ptr = detail::cached_signal_stage(t);
+  const auto& sig = *sig_ptr;
   const color::Mat3 to2020 = color::rgb_to_rgb(color::kRec709, color::kRec2020);
   double max_nits = 0, sum = 0;
   for (int y = 0; y < f.height; ++y) {

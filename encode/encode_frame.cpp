@@ -396,8 +396,11 @@ void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool kee
     f.stride_bytes = static_cast<std::size_t>(w) * 4;
     if (png_samples) f.signal16.resize(static_cast<std::size_t>(w) * h * 3);
   }
+  if (!png_samples || f.drm_fourcc != kDrmFormatXbgr2101010) f.signal16.clear();
   f.data.resize(f.stride_bytes * h);
-  if (keep_nits) f.display_nits.emplace(w, h);
+  if (keep_nits && (!f.display_nits || f.display_nits->width != w || f.display_nits->height != h))
+    f.display_nits.emplace(w, h);
+  if (!keep_nits) f.display_nits.reset();
   if (f.display_nits)
     for (std::size_t i = 3; i < f.display_nits->rgba.size(); i += 4) f.display_nits->rgba[i] = 1.0f;
   f.mastering = t.mastering();
@@ -405,15 +408,16 @@ void setup_frame(EncodedFrame& f, const DisplayTarget& t, int w, int h, bool kee
 
 }  // namespace
 
-Result<EncodedFrame> encode_prepared(const SceneInput& in, const PreparedPipeline& p) {
+Result<void> encode_prepared_into(const SceneInput& in, const PreparedPipeline& p, EncodedFrame& frame) {
   const auto& t = p.settings.target;
   const int w = in.image ? in.image->width : in.half->width;
   const int h = in.image ? in.image->height : in.half->height;
-  const ToneStage tone = detail::build_tone_stage(p);
-  const SignalStage sig = detail::build_signal_stage(t);
+  const auto tone_ptr = detail::cached_tone_stage(p);
+  const auto sig_ptr = detail::cached_signal_stage(t);
+  const ToneStage& tone = *tone_ptr;
+  const SignalStage& sig = *sig_ptr;
   const PreparedUi ui = prepare_ui(p);
 
-  EncodedFrame frame;
   setup_frame(frame, t, w, h, p.settings.keep_display_nits, p.settings.png_samples);
   FrameJob job{&in, &p, &tone, &sig, &ui};
   job.m_in = Mat3f(p.input_to_working * Mat3{{{{p.scene_scale, 0, 0}, {0, p.scene_scale, 0}, {0, 0, p.scene_scale}}}});
@@ -447,6 +451,12 @@ Result<EncodedFrame> encode_prepared(const SceneInput& in, const PreparedPipelin
   }
   frame.content_light = {max_nits, sum / (static_cast<double>(w) * h)};
   frame.settings = p.describe();
+  return {};
+}
+
+Result<EncodedFrame> encode_prepared(const SceneInput& in, const PreparedPipeline& p) {
+  EncodedFrame frame;
+  if (auto ok = encode_prepared_into(in, p, frame); !ok) return ok.error();
   return frame;
 }
 

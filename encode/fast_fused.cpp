@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "encode/fast_fused.hpp"
+#include "encode/float_lut.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace hdrd::kernels {
@@ -24,7 +25,7 @@ using VF = hn::Vec<DF>;
 HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
   const DU du;
   const DI di;
-  constexpr int kShift = 15;  // 23 - FloatBitsLut::kBitsPerOctave
+  constexpr int kShift = FloatBitsLut::kShift;
   v = hn::Min(hn::Max(v, hn::Set(df, l.lo)), hn::Set(df, l.hi_prev));
   const auto rel = hn::Sub(hn::BitCast(du, v), hn::Set(du, l.base_bits));
   const auto idx = hn::BitCast(di, hn::ShiftRight<kShift>(rel));

@@ -1,7 +1,7 @@
-// A function of a positive float tabulated on a grid uniform in log2 (2^bits_per_octave
+// A function of a positive float tabulated on a grid uniform in log2 (2^kBitsPerOctave
 // points per octave), indexed straight from the float's bit pattern and interpolated
 // linearly inside each bucket (the mantissa is linear in the value there). Smooth
-// transfer and tone functions reproduce to ~1e-8 with 256 points per octave, at the cost
+// transfer and tone functions reproduce to ~1e-8 with 128 points per octave, at the cost
 // of a shift, a subtract and two loads: this is how the fast encode path evaluates PQ,
 // sRGB, BT.1886, HLG and baked tone curves.
 #pragma once
@@ -17,7 +17,7 @@ namespace hdrd {
 
 class FloatBitsLut {
  public:
-  static constexpr int kBitsPerOctave = 8;
+  static constexpr int kBitsPerOctave = 7;
   static constexpr int kShift = 23 - kBitsPerOctave;
 
   FloatBitsLut() = default;

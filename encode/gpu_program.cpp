@@ -117,10 +117,12 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   if (s.grade) return unsupported("grading LUTs run on the CPU");
   if (s.dither) return unsupported("dither runs on the CPU");
   if (s.ui.overlay && s.ui.srgb_blend) return unsupported("sRGB-space UI blending runs on the CPU");
-  const detail::ToneStage tone = detail::build_tone_stage(p);
+  const auto tone_ptr = detail::cached_tone_stage(p);
+  const detail::ToneStage& tone = *tone_ptr;
   if (tone.kind == ToneKind::reference || tone.kind == ToneKind::none)
     return unsupported(fmt::format("tone curve '{}' is an RGB operator evaluated on the CPU", p.curve_info->name));
-  const detail::SignalStage sig = detail::build_signal_stage(t);
+  const auto sig_ptr = detail::cached_signal_stage(t);
+  const detail::SignalStage& sig = *sig_ptr;
 
   // Uniforms, printed from the prepared pipeline.
   auto& u = prog.uniforms;

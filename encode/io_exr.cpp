@@ -7,9 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <mutex>
 #include <set>
-#include <sstream>
 #include <thread>
 
 #include <fmt/format.h>
@@ -39,8 +37,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // OpenEXR's global thread pool starts at 0 threads; give it the machine's cores once.
-// The header size limits make OpenEXR reject absurd data windows while parsing the
-// header, before it allocates offset tables for them (our own check follows).
+// The header size limits are a second line behind prescan_header(): OpenEXR then rejects
+// absurd data windows and tile sizes itself while parsing the header (process-wide
+// settings; hdrd never handles larger images anyway).
 int exr_threads() {
   static const int threads = [] {
     Imf::Header::setMaxImageSize(kMaxImageDimension, kMaxImageDimension);
@@ -156,9 +155,11 @@ bool is_xyz_chromaticities(const color::Primaries& p) {
   return near(p.red, {1, 0}, kTol) && near(p.green, {0, 1}, kTol) && near(p.blue, {0, 0}, kTol);
 }
 
+// Usable when the conversion to_working() will build from it is finite (a white with
+// y = 0, collinear primaries or a white whose Bradford cone response is 0 are not).
 bool usable_primaries(const color::Primaries& p) {
   try {
-    const color::Mat3 m = color::rgb_to_xyz(p);
+    const color::Mat3 m = color::rgb_to_rgb(p, color::kRec2020);
     for (const auto& row : m.m)
       for (double v : row)
         if (!std::isfinite(v)) return false;

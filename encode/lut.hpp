@@ -130,6 +130,7 @@ class ShaperTable {
   struct BitTable {
     int low_exp = 0, steps_log2 = 0;
     std::uint32_t first_key = 0;
+    float lowest = 0;  // 2^low_exp
     float at_zero = 0;
     std::vector<float> values;
     float eval(float u, float at_one) const;

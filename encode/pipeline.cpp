@@ -8,6 +8,7 @@
 #include <cstring>
 #include <bit>
 #include <limits>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -96,11 +97,11 @@ ToneStage build_tone_stage(const PreparedPipeline& p) {
     s.kind = ToneKind::clip;
   } else if (p.apply == tonemap::Apply::per_channel) {
     s.kind = ToneKind::per_channel;
-    s.lut = FloatBitsLut([=](double x) { return curve->map(x) * pw; }, -24, 24);
+    s.lut = FloatBitsLut([=](double x) { return curve->map(x) * pw; }, -20, 20);
   } else if (p.apply == tonemap::Apply::max_rgb || p.apply == tonemap::Apply::luminance) {
     s.kind = ToneKind::ratio;
     s.ratio_of_luminance = p.apply == tonemap::Apply::luminance;
-    s.lut = FloatBitsLut([=](double m) { return curve->map(m) * pw / m; }, -24, 24);
+    s.lut = FloatBitsLut([=](double m) { return curve->map(m) * pw / m; }, -20, 20);
   } else {
     s.kind = ToneKind::reference;
   }
@@ -122,17 +123,18 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
   const double peak = t.peak_nits;
   switch (t.mode) {
     case Mode::hdr10:
-      s.signal = FloatBitsLut([](double n) { return transfer::pq_inverse_eotf(n); }, -24, 14);
+      // Down to 2^-30 cd/m2, where PQ rounds to 0 even as a 16-bit PNG sample.
+      s.signal = FloatBitsLut([](double n) { return transfer::pq_inverse_eotf(n); }, -30, 14);
       break;
     case Mode::sdr:
       if (t.sdr_curve == SdrCurve::srgb)
-        s.signal = FloatBitsLut([=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); }, -24, 14);
+        s.signal = FloatBitsLut([=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); }, -20, 14);
       else
-        s.signal = FloatBitsLut([=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); }, -24, 14);
+        s.signal = FloatBitsLut([=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); }, -20, 14);
       break;
     case Mode::sdr_bt1886: {
       const auto b = transfer::Bt1886::from_levels(peak, t.black_nits);
-      s.signal = FloatBitsLut([=](double n) { return b.inverse_eotf(n); }, -24, 14);
+      s.signal = FloatBitsLut([=](double n) { return b.inverse_eotf(n); }, -20, 14);
       break;
     }
     case Mode::hlg:
@@ -154,6 +156,48 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
     }
   }
   return s;
+}
+
+namespace {
+template <class T>
+class StageCache {
+ public:
+  template <class Build>
+  std::shared_ptr<const T> get(const std::string& key, Build build) {
+    {
+      std::lock_guard lock(mu_);
+      for (const auto& [k, v] : entries_)
+        if (k == key) return v;
+    }
+    auto value = std::make_shared<const T>(build());
+    std::lock_guard lock(mu_);
+    if (entries_.size() >= kCapacity) entries_.erase(entries_.begin());
+    entries_.emplace_back(key, value);
+    return value;
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = 16;
+  std::mutex mu_;
+  std::vector<std::pair<std::string, std::shared_ptr<const T>>> entries_;
+};
+}  // namespace
+
+std::shared_ptr<const ToneStage> cached_tone_stage(const PreparedPipeline& p) {
+  static StageCache<ToneStage> cache;
+  const auto& t = p.settings.target;
+  std::string key = fmt::format("{}|{}|{:.17g}|{:.17g}|{:.17g}|{}|{}", p.curve_info->name, tonemap::to_string(p.apply),
+                                t.peak_nits, t.black_nits, t.paper_white_nits, static_cast<int>(t.mode),
+                                p.settings.grade && p.settings.grade->placement() == grade::Placement::baked);
+  for (const auto& [k, v] : p.params) key += fmt::format("|{}={:.17g}", k, v);
+  return cache.get(key, [&] { return build_tone_stage(p); });
+}
+
+std::shared_ptr<const SignalStage> cached_signal_stage(const DisplayTarget& t) {
+  static StageCache<SignalStage> cache;
+  const std::string key = fmt::format("{}|{:.17g}|{:.17g}|{}|{}|{}", static_cast<int>(t.mode), t.peak_nits,
+                                      t.black_nits, static_cast<int>(t.range), t.bits, static_cast<int>(t.sdr_curve));
+  return cache.get(key, [&] { return build_signal_stage(t); });
 }
 
 // IEEE binary16 conversions (round to nearest even; overflow to Inf; NaN kept NaN).

@@ -96,5 +96,8 @@ color::Vec3 reference_signal(const DisplayTarget& t, color::Vec3 container_nits)
 // The whole frame.
 Result<EncodedFrame> encode_frame(const SceneInput& input, const EncodeSettings& settings);
 Result<EncodedFrame> encode_prepared(const SceneInput& input, const PreparedPipeline& prepared);
+// Same, encoding into `frame` and reusing its buffers when the size matches (a real-time
+// loop keeps its scan-out buffers instead of allocating and zeroing them every frame).
+Result<void> encode_prepared_into(const SceneInput& input, const PreparedPipeline& prepared, EncodedFrame& frame);
 
 }  // namespace hdrd

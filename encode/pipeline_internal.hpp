@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "encode/float_lut.hpp"
@@ -38,6 +39,11 @@ struct SignalStage {
 
 ToneStage build_tone_stage(const PreparedPipeline& p);
 SignalStage build_signal_stage(const DisplayTarget& t);
+// The same, from a small process-wide cache: the tables depend only on the curve, its
+// parameters and the display (exposure is folded into the input matrix), so a sequence
+// or a daemon re-preparing every frame builds them once.
+std::shared_ptr<const ToneStage> cached_tone_stage(const PreparedPipeline& p);
+std::shared_ptr<const SignalStage> cached_signal_stage(const DisplayTarget& t);
 
 // Reference helpers (double precision).
 color::Vec3 sanitize(color::Vec3 v);
@@ -45,7 +51,7 @@ color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMap
 color::Mat3 working_to_container(const DisplayTarget& t);
 // The container range accepted without gamut mapping: [-tol, peak (1 + tol)] with a
 // tolerance for float rounding of in-gamut colours (values inside are clamped).
-inline constexpr double kGamutTolerance = 1e-5;
+inline constexpr double kGamutTolerance = 1e-4;
 inline float gamut_low(const DisplayTarget& t) { return static_cast<float>(-kGamutTolerance * t.peak_nits); }
 inline float gamut_high(const DisplayTarget& t) { return static_cast<float>(t.peak_nits * (1 + kGamutTolerance)); }
 

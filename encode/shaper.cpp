@@ -148,7 +148,8 @@ void build(auto& t, int low_exp, int steps_log2, F&& f) {
   t.low_exp = low_exp;
   t.steps_log2 = steps_log2;
   const int shift = kMantissaBits - steps_log2;
-  t.first_key = bits_of(std::ldexp(1.0f, low_exp)) >> shift;
+  t.lowest = std::ldexp(1.0f, low_exp);
+  t.first_key = bits_of(t.lowest) >> shift;
   const std::uint32_t last_key = bits_of(1.0f) >> shift;
   t.values.resize(last_key - t.first_key + 2);
   for (std::uint32_t k = t.first_key; k <= last_key + 1; ++k)
@@ -158,7 +159,6 @@ void build(auto& t, int low_exp, int steps_log2, F&& f) {
 }  // namespace
 
 float ShaperTable::BitTable::eval(float u, float at_one) const {
-  const float lowest = std::ldexp(1.0f, low_exp);
   if (!(u > lowest)) return u > 0 ? at_zero + (values[0] - at_zero) * (u / lowest) : at_zero;
   if (u >= 1.0f) return at_one;
   const int shift = kMantissaBits - steps_log2;
@@ -216,14 +216,31 @@ float ShaperTable::inverse(float s) const {
   return s;
 }
 
+// Whole buffers: the PQ case (the display placement's, the common one) gets its own loop
+// so nothing but the table lookup runs per value.
 void ShaperTable::forward_rgba(float* rgba, std::size_t pixels) const {
   if (spec_.kind == grade::Shaper::none) return;
+  if (spec_.kind == grade::Shaper::pq) {
+    const float inv_max = static_cast<float>(1.0 / spec_.max);
+    for (std::size_t i = 0; i < pixels; ++i)
+      for (int c = 0; c < 3; ++c) rgba[4 * i + c] = fwd_.eval(rgba[4 * i + c] * inv_max, 1.0f);
+    return;
+  }
   for (std::size_t i = 0; i < pixels; ++i)
     for (int c = 0; c < 3; ++c) rgba[4 * i + c] = forward(rgba[4 * i + c]);
 }
 
 void ShaperTable::inverse_rgba(float* rgba, std::size_t pixels) const {
   if (spec_.kind == grade::Shaper::none) return;
+  if (spec_.kind == grade::Shaper::pq) {
+    const float top = static_cast<float>(spec_.max);
+    for (std::size_t i = 0; i < pixels; ++i)
+      for (int c = 0; c < 3; ++c) {
+        const float s = rgba[4 * i + c];
+        rgba[4 * i + c] = s > 1.0f ? top : inv_.eval(s, top);
+      }
+    return;
+  }
   for (std::size_t i = 0; i < pixels; ++i)
     for (int c = 0; c < 3; ++c) rgba[4 * i + c] = inverse(rgba[4 * i + c]);
 }

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Builds and runs the encode benchmark (4K RGBA16F -> HDR10 / SDR / scRGB) and prints, as
+# its last line, one JSON object:
+#   {"hdr10": {...}, "sdr": {...}, "scrgb": {...}}
+# each with floor_ms, ocio_ms, hdrd_ms_1t, hdrd_ms_2t, max_code_error, pct_off_by_one
+# (medians of the repetitions), plus the ratios the targets are stated in.
+# env: BUILD_DIR (default build-release), REPS (default 5)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build_dir=${BUILD_DIR:-build-release}
+BUILD_DIR=$build_dir BUILD_TYPE=Release bash scripts/build.sh -DHDRD_BUILD_TESTS=OFF >/dev/null
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+"$build_dir/bench/bench_encode" --benchmark_repetitions="${REPS:-5}" --benchmark_report_aggregates_only=true \
+  --benchmark_format=json --benchmark_out="$out" --benchmark_out_format=json >&2
+python3 - "$out" <<'PY'
+import json, sys
+runs = json.load(open(sys.argv[1]))["benchmarks"]
+def median(name):
+    for r in runs:
+        if r["name"] in (name + "_median", name):
+            if r.get("aggregate_name", "median") == "median":
+                return r["real_time"] if r["time_unit"] == "ms" else r["real_time"] / 1e6
+    raise SystemExit("missing " + name)
+def counter(name, key):
+    for r in runs:
+        if r["name"].startswith(name) and key in r:
+            return r[key]
+    return None
+result = {}
+for mode in ("hdr10", "sdr", "scrgb"):
+    floor = median("BM_floor/%d/real_time" % (8 if mode == "scrgb" else 4))
+    ocio = median("BM_ocio_%s/real_time" % mode)
+    t1 = median("BM_hdrd_%s/1/real_time" % mode)
+    t2 = median("BM_hdrd_%s/2/real_time" % mode)
+    result[mode] = {
+        "floor_ms": round(floor, 2), "ocio_ms": round(ocio, 2),
+        "hdrd_ms_1t": round(t1, 2), "hdrd_ms_2t": round(t2, 2),
+        "max_code_error": counter("BM_accuracy_" + mode, "max_code_error"),
+        "pct_off_by_one": round(counter("BM_accuracy_" + mode, "pct_off_by_one"), 4),
+        "x_faster_than_ocio_1t": round(ocio / t1, 1),
+        "x_of_floor_2t": round(t2 / median("BM_floor/%d/real_time" % (8 if mode == "scrgb" else 4)), 2),
+    }
+ui1 = median("BM_hdrd_hdr10_ui/1/real_time"); ui2 = median("BM_hdrd_hdr10_ui/2/real_time")
+result["hdr10"]["hdrd_ui_ms_1t"] = round(ui1, 2)
+result["hdr10"]["hdrd_ui_ms_2t"] = round(ui2, 2)
+print(json.dumps(result))
+PY
