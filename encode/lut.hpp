@@ -110,6 +110,19 @@ std::string to_string(const ShaperSpec& s);
 std::string shaper_comment(const ShaperSpec& s);
 std::optional<ShaperSpec> shaper_from_comments(const std::vector<std::string>& comments);
 
+namespace detail {
+// A log-spaced table (see ShaperTable) for the SIMD buffer kernel: out = f(x * scale) on
+// channels R, G, B of RGBA pixels; at_one above u >= 1, linear to at_zero below `lowest`.
+struct BitTableArgs {
+  const float* values;
+  std::uint32_t count;      // entries in values
+  std::uint32_t first_key;  // float bits >> shift of `lowest`
+  int shift;                // 23 - log2(steps per octave)
+  float lowest, at_zero, at_one, scale;
+};
+void bit_table_rgba(const BitTableArgs& t, float* rgba, std::size_t pixels);
+}  // namespace detail
+
 // The shaper for whole buffers in float: PQ through log-spaced tables (exact at the
 // knots, linear between; error stated by kShaperTableMaxError and checked by a test),
 // the others through float log2/exp2/sqrt.
@@ -134,6 +147,7 @@ class ShaperTable {
     float at_zero = 0;
     std::vector<float> values;
     float eval(float u, float at_one) const;
+    detail::BitTableArgs args(float scale, float at_one) const;
   };
   BitTable fwd_, inv_;
 };

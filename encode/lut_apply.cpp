@@ -148,6 +148,45 @@ void ApplyHalf(const KernelArgs& k, const std::uint16_t* in, std::uint16_t* out,
   std::memcpy(out + 4 * i, tail, rest * 4 * sizeof(std::uint16_t));
 }
 
+// Shaper tables (encode/shaper.cpp) on whole buffers: the segment index is the float's
+// exponent and top mantissa bits, so each value is two gathers and a lerp.
+template <class D>
+HWY_INLINE hn::Vec<D> EvalBitTable(D d, const detail::BitTableArgs& t, hn::Vec<D> x) {
+  const hn::RebindToSigned<D> di;
+  const hn::RebindToUnsigned<D> du;
+  const auto u = hn::Mul(x, hn::Set(d, t.scale));
+  const auto bits = hn::BitCast(du, u);
+  auto idx = hn::Sub(hn::BitCast(di, hn::ShiftRightSame(bits, t.shift)), hn::Set(di, int(t.first_key)));
+  idx = hn::Min(hn::Max(idx, hn::Zero(di)), hn::Set(di, int(t.count) - 2));
+  const auto frac = hn::Mul(hn::ConvertTo(d, hn::BitCast(di, hn::And(bits, hn::Set(du, (1u << t.shift) - 1)))),
+                            hn::Set(d, 1.0f / float(1u << t.shift)));
+  const auto a = hn::GatherIndex(d, t.values, idx);
+  const auto b = hn::GatherIndex(d, t.values + 1, idx);
+  const auto inside = hn::MulAdd(hn::Sub(b, a), frac, a);
+  const auto v0 = hn::Set(d, t.values[0]), z = hn::Set(d, t.at_zero);
+  // NaN and negatives: Max(u, 0) is 0 on every target Highway maps Max to minps/maxps.
+  const auto below = hn::MulAdd(hn::Sub(v0, z), hn::Div(hn::Max(u, hn::Zero(d)), hn::Set(d, t.lowest)), z);
+  const auto lowest = hn::Set(d, t.lowest), one = hn::Set(d, 1.0f);
+  return hn::IfThenElse(hn::Ge(u, one), hn::Set(d, t.at_one), hn::IfThenElse(hn::Gt(u, lowest), inside, below));
+}
+
+void BitTableRgba(const detail::BitTableArgs& t, float* HWY_RESTRICT rgba, std::size_t pixels) {
+  const hn::ScalableTag<float> d;
+  const std::size_t lanes = hn::Lanes(d);
+  hn::Vec<decltype(d)> r, g, b, a;
+  const auto run = [&](float* p) {
+    hn::LoadInterleaved4(d, p, r, g, b, a);
+    hn::StoreInterleaved4(EvalBitTable(d, t, r), EvalBitTable(d, t, g), EvalBitTable(d, t, b), a, d, p);
+  };
+  std::size_t i = 0;
+  for (; i + lanes <= pixels; i += lanes) run(rgba + 4 * i);
+  if (i == pixels) return;
+  HWY_ALIGN float tail[4 * (HWY_MAX_BYTES / sizeof(float))] = {};
+  std::memcpy(tail, rgba + 4 * i, (pixels - i) * 4 * sizeof(float));
+  run(tail);
+  std::memcpy(rgba + 4 * i, tail, (pixels - i) * 4 * sizeof(float));
+}
+
 }  // namespace hdrd::lut::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
 
@@ -158,6 +197,11 @@ namespace hdrd::lut {
 
 HWY_EXPORT(ApplyFloat);
 HWY_EXPORT(ApplyHalf);
+HWY_EXPORT(BitTableRgba);
+
+void detail::bit_table_rgba(const BitTableArgs& t, float* rgba, std::size_t pixels) {
+  HWY_DYNAMIC_DISPATCH(BitTableRgba)(t, rgba, pixels);
+}
 
 Applier3D::Applier3D(const Lut3D& lut, Interpolation interp) : size_(lut.size), interp_(interp) {
   const std::size_t entries = static_cast<std::size_t>(size_) * size_ * size_;

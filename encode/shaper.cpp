@@ -158,6 +158,11 @@ void build(auto& t, int low_exp, int steps_log2, F&& f) {
 }
 }  // namespace
 
+detail::BitTableArgs ShaperTable::BitTable::args(float scale, float at_one) const {
+  return {values.data(), static_cast<std::uint32_t>(values.size()), first_key, kMantissaBits - steps_log2,
+          lowest, at_zero, at_one, scale};
+}
+
 float ShaperTable::BitTable::eval(float u, float at_one) const {
   if (!(u > lowest)) return u > 0 ? at_zero + (values[0] - at_zero) * (u / lowest) : at_zero;
   if (u >= 1.0f) return at_one;
@@ -222,9 +227,7 @@ void ShaperTable::forward_rgba(float* rgba, std::size_t pixels) const {
   if (spec_.kind == grade::Shaper::none) return;
   if (spec_.kind == grade::Shaper::pq) {
     const float inv_max = static_cast<float>(1.0 / spec_.max);
-    for (std::size_t i = 0; i < pixels; ++i)
-      for (int c = 0; c < 3; ++c) rgba[4 * i + c] = fwd_.eval(rgba[4 * i + c] * inv_max, 1.0f);
-    return;
+    return detail::bit_table_rgba(fwd_.args(inv_max, 1.0f), rgba, pixels);
   }
   for (std::size_t i = 0; i < pixels; ++i)
     for (int c = 0; c < 3; ++c) rgba[4 * i + c] = forward(rgba[4 * i + c]);
@@ -232,15 +235,8 @@ void ShaperTable::forward_rgba(float* rgba, std::size_t pixels) const {
 
 void ShaperTable::inverse_rgba(float* rgba, std::size_t pixels) const {
   if (spec_.kind == grade::Shaper::none) return;
-  if (spec_.kind == grade::Shaper::pq) {
-    const float top = static_cast<float>(spec_.max);
-    for (std::size_t i = 0; i < pixels; ++i)
-      for (int c = 0; c < 3; ++c) {
-        const float s = rgba[4 * i + c];
-        rgba[4 * i + c] = s > 1.0f ? top : inv_.eval(s, top);
-      }
-    return;
-  }
+  if (spec_.kind == grade::Shaper::pq)  // s > 1 falls in the table's "at one" branch
+    return detail::bit_table_rgba(inv_.args(1.0f, static_cast<float>(spec_.max)), rgba, pixels);
   for (std::size_t i = 0; i < pixels; ++i)
     for (int c = 0; c < 3; ++c) rgba[4 * i + c] = inverse(rgba[4 * i + c]);
 }

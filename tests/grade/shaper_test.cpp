@@ -98,6 +98,35 @@ TEST(Shaper, TablesMeetStatedAccuracy) {
     }
 }
 
+// The SIMD buffer path (PQ) and the scalar path agree, edge cases included.
+TEST(Shaper, BufferPathMatchesScalar) {
+  for (const ShaperSpec spec : {ShaperSpec::defaults(Shaper::pq), ShaperSpec{Shaper::pq, 0, 10000},
+                                ShaperSpec::defaults(Shaper::log2)}) {
+    const ShaperTable t(spec);
+    std::vector<float> xs = {0, -1, NAN, INFINITY, -INFINITY, 1e-30f, 1e-20f, 1e-12f, 5e38f, 1.0f, 0.5f, 2.0f};
+    for (double l = -16; l <= 5; l += 0.013) xs.push_back(float(std::pow(10.0, l)));
+    std::vector<float> px(xs.size() * 4, 0.25f);
+    for (std::size_t i = 0; i < xs.size(); ++i) px[4 * i + i % 3] = xs[i];
+    auto fwd = px;
+    t.forward_rgba(fwd.data(), xs.size());
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+      ASSERT_NEAR(fwd[4 * i + i % 3], t.forward(xs[i]), 1e-7) << to_string(spec) << " x " << xs[i];  // FMA rounding
+      ASSERT_EQ(fwd[4 * i + 3], 0.25f);
+    }
+    std::vector<float> ss = {0, -1, NAN, 1.0f, 1.5f, INFINITY, 1e-7f, 7.3e-7f, 1e-6f};
+    for (double v = 0; v <= 1; v += 1.0 / 4099) ss.push_back(float(v));
+    std::vector<float> q(ss.size() * 4, 0.5f);
+    for (std::size_t i = 0; i < ss.size(); ++i) q[4 * i + i % 3] = ss[i];
+    t.inverse_rgba(q.data(), ss.size());
+    for (std::size_t i = 0; i < ss.size(); ++i) {
+      const float want = t.inverse(ss[i]);
+      ASSERT_TRUE(q[4 * i + i % 3] == want || std::fabs(q[4 * i + i % 3] - want) <= 1e-6f * std::fabs(want) ||
+                  (std::isnan(want) && std::isnan(q[4 * i + i % 3])))
+          << to_string(spec) << " s " << ss[i] << " got " << q[4 * i + i % 3] << " want " << want;
+    }
+  }
+}
+
 TEST(Shaper, BufferFunctionsLeaveAlpha) {
   const ShaperTable t(ShaperSpec::defaults(Shaper::pq));
   float px[8] = {1, 2, 3, 0.5f, 0, 0, 0, 7};
