@@ -6,6 +6,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "display/displays.hpp"
+#include "display/profile.hpp"
+#include "encode/grade.hpp"
 #include "encode/result.hpp"
 #include "tools/hdrd/command.hpp"
 
@@ -30,7 +33,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 
 void add_pipeline_options(CLI::App& app, PipelineOptions& o) {
   const std::string d = "Display";
-  app.add_option("--mode", o.mode, "Output mode: hdr10, hlg, scrgb, sdr, sdr-bt1886")->group(d)->capture_default_str();
+  app.add_option("--mode", o.mode, "Output mode: hdr10, hlg, scrgb, sdr, sdr-bt1886 (default: the display's, else hdr10)")->group(d);
   app.add_option("--peak", o.peak_nits, "Display peak luminance, cd/m2 (mode default: hdr10/hlg/scrgb 1000, sdr 100)")->group(d);
   app.add_option("--black", o.black_nits, "Display black luminance, cd/m2 (hdr10 0.005, sdr 0.1, hlg/scrgb 0)")->group(d);
   app.add_option("--paper-white", o.paper_white_nits, "Luminance of relative 1.0 (diffuse white), cd/m2 (HDR 203, SDR = peak)")->group(d);
@@ -39,8 +42,9 @@ void add_pipeline_options(CLI::App& app, PipelineOptions& o) {
   app.add_option("--range", o.range, "Code range: full or narrow (KMS scan-out is always full)")->group(d)->capture_default_str();
   app.add_option("--bits", o.bits, "Bits per channel: 10 (hdr10, hlg), 8 or 10 (sdr)")->group(d);
   app.add_option("--sdr-curve", o.sdr_curve, "SDR transfer: srgb (piecewise) or gamma22")->group(d)->capture_default_str();
-  app.add_option("--display", o.display, "'auto': levels and primaries from the first connected HDR-capable display")->group(d);
-  app.add_option("--edid", o.edid_path, "Take the display's levels and primaries from an EDID file")->group(d);
+  app.add_option("--display", o.display, "'auto' (first connected HDR-capable display) or a connector name: its mode, levels, primaries")->group(d);
+  app.add_option("--edid", o.edid_path, "Take the display's mode, levels and primaries from an EDID file (useful headless)")->group(d);
+  app.add_option("--profile", o.profile_override, "Display profile override file (TOML or JSON; see docs/displays.md)")->group(d);
 
   const std::string t = "Tone mapping";
   app.add_option("--tonemap", o.tonemap, "Tone curve (see 'hdrd tonemap --list'; default pq-shoulder)")->group(t);
@@ -76,6 +80,9 @@ void add_pipeline_options(CLI::App& app, PipelineOptions& o) {
   app.add_option("--grade", o.grade_placement, "Where the LUT applies: scene, display (default) or baked")->group(g);
   app.add_option("--ocio-config", o.ocio_config, "OpenColorIO config (default: $OCIO)")->group(g);
   app.add_option("--ocio-look", o.ocio_look, "OpenColorIO look to apply")->group(g);
+  app.add_option("--ocio-display", o.ocio_display, "OpenColorIO display (with --ocio-view)")->group(g);
+  app.add_option("--ocio-view", o.ocio_view, "OpenColorIO view (with --ocio-display)")->group(g);
+  app.add_flag("--lut-trilinear", o.lut_trilinear, "Trilinear instead of tetrahedral LUT interpolation")->group(g);
 
   const std::string out = "Output";
   app.add_option("--format", o.formats, "Comma-separated: png, exr, raw (default: all that apply to the mode)")->group(out);
@@ -86,9 +93,26 @@ void add_pipeline_options(CLI::App& app, PipelineOptions& o) {
 EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_exposure,
                               std::vector<std::string>* notes) {
   EncodeSettings s;
-  const auto mode = parse_mode(o.mode);
-  if (!mode) fail("--mode", fmt::format("unknown mode '{}' (hdr10, hlg, scrgb, sdr, sdr-bt1886)", o.mode));
+  // The display profile (--edid wins over --display), then per-mode defaults, then flags.
+  auto profile = display::select_profile(o.display, o.edid_path, o.profile_override);
+  if (!profile) throw HdrdError(profile.error());
+  if (!o.display.empty() && !*profile && notes)
+    notes->push_back("--display " + o.display + ": no display attached (headless); using the mode's defaults");
+  std::optional<Mode> mode;
+  if (!o.mode.empty()) {
+    mode = parse_mode(o.mode);
+    if (!mode) fail("--mode", fmt::format("unknown mode '{}' (hdr10, hlg, scrgb, sdr, sdr-bt1886)", o.mode));
+  } else {
+    mode = *profile ? (*profile)->mode : Mode::hdr10;
+  }
   auto& t = s.target = default_target(*mode);
+  if (*profile) {
+    display::apply_profile(**profile, t, false);
+    if (notes) {
+      notes->push_back("display profile: " + (*profile)->source + " (" + (*profile)->mode_reason + ")");
+      for (const auto& n : (*profile)->notes) notes->push_back(n);
+    }
+  }
   const bool sdr = *mode == Mode::sdr || *mode == Mode::sdr_bt1886;
   if (o.peak_nits) t.peak_nits = *o.peak_nits;
   if (o.black_nits) t.black_nits = *o.black_nits;
@@ -165,6 +189,31 @@ EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_e
     if (o.ui_blend != "linear" && o.ui_blend != "srgb") fail("--ui-blend", fmt::format("'{}' is not linear or srgb", o.ui_blend));
     s.ui.srgb_blend = o.ui_blend == "srgb";
     s.ui.dim = o.ui_dim;
+  }
+  if (!o.lut_path.empty() || !o.ocio_look.empty() || !o.ocio_display.empty()) {
+    grade::GradeSettings gs;
+    gs.lut_path = o.lut_path;
+    gs.trilinear = o.lut_trilinear;
+    gs.ocio_config = o.ocio_config;
+    gs.ocio_look = o.ocio_look;
+    gs.ocio_display = o.ocio_display;
+    gs.ocio_view = o.ocio_view;
+    if (!o.lut_shaper.empty()) {
+      gs.shaper = grade::parse_shaper(o.lut_shaper);
+      if (!gs.shaper) fail("--lut-shaper", fmt::format("'{}' is not pq, log2, sqrt or sqrt-sqrt", o.lut_shaper));
+    }
+    if (!o.grade_placement.empty()) {
+      const auto pl = grade::parse_placement(o.grade_placement);
+      if (!pl) fail("--grade", fmt::format("'{}' is not scene, display or baked", o.grade_placement));
+      gs.placement = *pl;
+    }
+    std::vector<std::string> warnings;
+    auto g = grade::load_grade(gs, t.peak_nits, &warnings);
+    if (!g) throw HdrdError(g.error());
+    s.grade = *g;
+    if (notes) notes->insert(notes->end(), warnings.begin(), warnings.end());
+  } else if (!o.lut_shaper.empty() || !o.grade_placement.empty()) {
+    fail(o.lut_shaper.empty() ? "--grade" : "--lut-shaper", "needs --lut (or an OpenColorIO look or display/view)");
   }
   s.dither = o.dither;
   s.threads = o.threads;

@@ -14,7 +14,7 @@
 namespace hdrd::cli {
 
 struct PipelineOptions {
-  std::string mode = "hdr10";
+  std::string mode;  // empty: the display profile's mode (--edid/--display), else hdr10
   std::optional<double> peak_nits, black_nits, paper_white_nits, ui_white_nits, sdr_white_nits;
   std::string range = "full";
   std::optional<int> bits;
@@ -36,10 +36,12 @@ struct PipelineOptions {
   std::string ui_blend = "linear";
   double ui_dim = 0.0;
   // grading
-  std::string lut_path, lut_shaper, grade_placement, ocio_config, ocio_look;
+  std::string lut_path, lut_shaper, grade_placement, ocio_config, ocio_look, ocio_display, ocio_view;
+  bool lut_trilinear = false;
   // display
-  std::string display;   // "auto"
+  std::string display;   // "auto" or a connector name
   std::string edid_path;
+  std::string profile_override;  // a display profile override file (TOML/JSON)
   // output
   std::string formats;   // "png,exr,raw"
   bool dither = false;
