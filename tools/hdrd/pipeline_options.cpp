@@ -243,10 +243,12 @@ std::string summary_text(const EncodedFrame& f, const io::DumpResult& dumps, boo
     j["notes"] = notes;
     return j.dump(2);
   }
-  std::string s = fmt::format("{} {}x{} {} peak {} cd/m2, paper white {} cd/m2, MaxCLL {:.0f}, MaxFALL {:.0f}\n",
-                              to_string(f.target.mode), f.width, f.height, fourcc_name(f.drm_fourcc),
-                              f.target.peak_nits, f.target.paper_white_nits, std::ceil(f.content_light.max_cll_nits),
-                              std::ceil(f.content_light.max_fall_nits));
+  std::string s = fmt::format("{} {}x{} {} peak {} cd/m2, paper white {} cd/m2", to_string(f.target.mode), f.width,
+                              f.height, fourcc_name(f.drm_fourcc), f.target.peak_nits, f.target.paper_white_nits);
+  if (f.target.is_hdr())
+    s += fmt::format(", MaxCLL {:.0f}, MaxFALL {:.0f}", std::ceil(f.content_light.max_cll_nits),
+                     std::ceil(f.content_light.max_fall_nits));
+  s += "\n";
   for (const auto& [kind, path] : dumps.files) s += fmt::format("  {:8} {}\n", kind, path);
   for (const auto& n : notes) s += "  note: " + n + "\n";
   return s;
