@@ -200,6 +200,26 @@ TEST(ExrRead, ChannelSets) {
   }
 }
 
+TEST(ExrRead, DegenerateChromaticitiesAreIgnoredWithAWarning) {
+  TempDir tmp;
+  Imf::Header h(2, 2);
+  Imf::addChromaticities(h, Imf::Chromaticities({0.3f, 0.3f}, {0.3f, 0.3f}, {0.3f, 0.3f}, {0.3127f, 0.329f}));
+  Imf::addWhiteLuminance(h, -5.0f);
+  std::vector<Imf::Rgba> px(4, Imf::Rgba(1, 1, 1, 1));
+  {
+    Imf::RgbaOutputFile out((tmp / "degenerate.exr").c_str(), h, Imf::WRITE_RGB);
+    out.setFrameBuffer(px.data(), 1, 2);
+    out.writePixels(2);
+  }
+  const auto e = read_exr(tmp / "degenerate.exr");
+  ASSERT_TRUE(e.ok()) << e.error().message;
+  EXPECT_FALSE(e->chromaticities.has_value());
+  EXPECT_FALSE(e->white_luminance.has_value());
+  EXPECT_TRUE(any_warning(*e, "ignoring degenerate chromaticities"));
+  EXPECT_TRUE(any_warning(*e, "ignoring whiteLuminance -5"));
+  EXPECT_NEAR(e->to_working().m[0][0], color::kBt2087Rec709ToRec2020.m[0][0], 1e-4);  // treated as Rec.709
+}
+
 TEST(ExrRead, MultiPartReadsTheFirstImagePart) {
   TempDir tmp;
   const int w = 4, h = 2;
