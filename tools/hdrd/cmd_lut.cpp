@@ -190,6 +190,7 @@ void run_bake(const BakeOptions& o) {
     gs.placement = *p;
     rq.look = grade::load_grade(gs, o.peak, &warnings).value();
   }
+  if (o.common.quiet) set_progress_enabled(false);
   progress("baking {} for {} cd/m2 into a {}^3 LUT", rq.curve, o.peak, o.size);
   const auto result = lut::bake_tone_curve(rq).value();
   lut::write_cube(result.cube, o.output).value();
