@@ -29,15 +29,6 @@ int bytes_per_pixel(std::uint32_t drm_fourcc) {
   return 0;
 }
 
-std::string fourcc_string(std::uint32_t code) {
-  std::string s(4, ' ');
-  for (int i = 0; i < 4; ++i) {
-    const char c = static_cast<char>((code >> (8 * i)) & 0xff);
-    s[static_cast<std::size_t>(i)] = (c >= 0x20 && c < 0x7f) ? c : '?';
-  }
-  return s;
-}
-
 namespace {
 bool fourcc_fits_mode(std::uint32_t fourcc, Mode mode) {
   switch (mode) {
@@ -55,9 +46,9 @@ Result<void> check_frame(const EncodedFrame& f) {
   const auto bad = [](std::string msg) { return make_error("frame.invalid", std::move(msg)); };
   if (auto size = check_image_size(f.width, f.height); !size) return size.error();
   const int bpp = bytes_per_pixel(f.drm_fourcc);
-  if (bpp == 0) return bad(fmt::format("unsupported DRM format {} (0x{:08x})", fourcc_string(f.drm_fourcc), f.drm_fourcc));
+  if (bpp == 0) return bad(fmt::format("unsupported DRM format 0x{:08x}", f.drm_fourcc));
   if (!fourcc_fits_mode(f.drm_fourcc, f.target.mode))
-    return bad(fmt::format("DRM format {} does not fit mode {}", fourcc_string(f.drm_fourcc), to_string(f.target.mode)));
+    return bad(fmt::format("DRM format {} does not fit mode {}", fourcc_name(f.drm_fourcc), to_string(f.target.mode)));
   if (f.stride_bytes < static_cast<std::size_t>(f.width) * bpp)
     return bad(fmt::format("stride {} bytes is less than width {} x {} bytes per pixel", f.stride_bytes, f.width, bpp));
   if (f.data.size() != f.stride_bytes * static_cast<std::size_t>(f.height))
@@ -224,7 +215,7 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
   j["hdrd_version"] = HDRD_VERSION_STRING;
 #endif
   j["mode"] = std::string(to_string(t.mode));
-  j["fourcc"] = detail::fourcc_string(frame.drm_fourcc);
+  j["fourcc"] = fourcc_name(frame.drm_fourcc);
   j["fourcc_code"] = frame.drm_fourcc;
   j["width"] = frame.width;
   j["height"] = frame.height;
