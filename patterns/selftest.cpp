@@ -1,0 +1,209 @@
+// The display-mode suite: builds the frames (uniform paper white, Rec.709 primaries, an
+// over-range ramp, patterns, rendered built-in scenes), encodes them for the mode and
+// runs the check functions over them.
+#include <chrono>
+#include <filesystem>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "display/hdr_metadata.hpp"
+#include "encode/pipeline.hpp"
+#include "encode/tonemap.hpp"
+#include "patterns/patterns.hpp"
+#include "patterns/selftest.hpp"
+#include "shading/renderer.hpp"
+
+namespace hdrd::patterns {
+namespace {
+
+Image uniform(int w, int h, color::Vec3 v) {
+  Image img(w, h);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    img.rgba[i * 4] = float(v.x), img.rgba[i * 4 + 1] = float(v.y), img.rgba[i * 4 + 2] = float(v.z);
+    img.rgba[i * 4 + 3] = 1;
+  }
+  return img;
+}
+
+// Relative Rec.709 input (1.0 = paper white), manual exposure at 0 EV.
+Result<EncodedFrame> encode_relative(const Image& img, const DisplayTarget& t, const std::string& curve,
+                                     bool keep_nits = false) {
+  EncodeSettings s;
+  s.target = t;
+  s.tone.curve = curve;
+  s.keep_display_nits = keep_nits;
+  SceneInput in;
+  in.image = &img;
+  return encode_frame(in, s);
+}
+
+Check failed(std::string name, std::string source, const Error& e) {
+  return Check{std::move(name), std::move(source), false, false, e.message};
+}
+
+void paper_white_checks(Report& r) {
+  const Image white = uniform(16, 16, {1, 1, 1});
+  const bool claims_apply = r.target.peak_nits >= 2 * r.target.paper_white_nits;
+  for (const auto& info : tonemap::curves()) {
+    const std::string curve(info.name);
+    if (curve != "clip" && !(info.keeps_reference_white && claims_apply)) continue;
+    auto f = encode_relative(white, r.target, curve);
+    r.checks.push_back(f ? check_paper_white(*f, curve) : failed("paper-white/" + curve, "encode", f.error()));
+  }
+  if (!claims_apply)
+    r.checks.push_back(Check{"paper-white/keeps-reference-white-curves", "tonemap.hpp: the claim holds when peak >= 2 x paper white",
+                             true, true, fmt::format("peak {} < 2 x paper white {}: only clip is checked", r.target.peak_nits,
+                                                     r.target.paper_white_nits)});
+}
+
+void primaries_checks(Report& r) {
+  Image img(48, 8);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 48; ++x) {
+      float* p = img.px(x, y);
+      p[x / 16] = 0.5f;  // red, green, blue thirds at half paper white
+      p[3] = 1;
+    }
+  for (const std::string& curve : {std::string("clip"), std::string(tonemap::default_curve(r.target.mode))}) {
+    auto f = encode_relative(img, r.target, curve);
+    r.checks.push_back(f ? check_rec709_primaries(*f, curve) : failed("rec709-primaries/" + curve, "encode", f.error()));
+  }
+}
+
+// A ramp from 1e-3 to 1e3 x paper white: the highest codes, the content light and the dumps.
+void ramp_checks(Report& r) {
+  Image ramp(256, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 256; ++x) {
+      float* p = ramp.px(x, y);
+      p[0] = p[1] = p[2] = float(std::pow(10.0, -3 + 6.0 * x / 255));
+      if (y >= 8) p[1] *= 0.25f, p[2] *= 0.1f;  // a saturated half
+      p[3] = 1;
+    }
+  for (const std::string& curve : {std::string("clip"), std::string(tonemap::default_curve(r.target.mode))}) {
+    auto f = encode_relative(ramp, r.target, curve, true);
+    if (!f) { r.checks.push_back(failed("peak/ramp-" + curve, "encode", f.error())); continue; }
+    r.checks.push_back(check_peak(*f, "ramp-" + curve));
+    r.checks.push_back(check_content_light(*f, "ramp-" + curve));
+    if (curve != "clip") continue;
+    if (r.target.mode == Mode::hdr10 || r.target.mode == Mode::hlg) {
+      auto m = display::make_hdr_output_metadata(r.target.mode, f->mastering, f->content_light);
+      if (!m) r.checks.push_back(failed("metadata-blob", "display/hdr_metadata", m.error()));
+      else {
+        const auto bytes = display::serialize(*m);
+        r.checks.push_back(check_metadata_blob(*f, bytes));
+      }
+    }
+    if (r.target.mode != Mode::scrgb) {
+      auto png = io::encode_png(*f);
+      auto info = png ? io::read_png_info_memory(*png) : Result<io::PngInfo>(png.error());
+      r.checks.push_back(info ? check_png(*f, *info) : failed("png-chunks", "io", info.error()));
+    }
+    const auto dir = std::filesystem::temp_directory_path() / fmt::format("hdrd-selftest-{}", ::getpid());
+    std::filesystem::create_directories(dir);
+    auto dumps = io::write_dumps(*f, dir / "ramp", {io::DumpFormat::exr});
+    auto exr = dumps ? io::read_exr(dumps->files.at("exr")) : Result<io::ExrImage>(dumps.error());
+    r.checks.push_back(exr ? check_exr(*f, *exr) : failed("exr-attributes", "io", exr.error()));
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }
+}
+
+void pattern_checks(Report& r) {
+  PatternOptions o;
+  o.width = 96, o.height = 54, o.labels = false;
+  for (double level : {r.target.paper_white_nits, r.target.peak_nits * 0.5, r.target.peak_nits}) {
+    o.level_nits = level;
+    auto f = make_pattern("window", r.target, o, false);
+    if (!f) { r.checks.push_back(failed("window", "pattern", f.error())); continue; }
+    Check c = check_window(*f, level);
+    c.name = fmt::format("window/{:g}", level);
+    r.checks.push_back(c);
+    r.checks.push_back(check_peak(*f, fmt::format("window-{:g}", level)));
+  }
+  o.level_nits = 0;
+  for (const char* name : {"pq-ramp", "clipping", "near-black", "sdr-grey"}) {
+    auto f = make_pattern(name, r.target, o, false);
+    if (!f) { r.checks.push_back(failed(std::string("pattern/") + name, "pattern", f.error())); continue; }
+    r.checks.push_back(check_peak(*f, name));
+    r.checks.push_back(check_content_light(*f, name));
+  }
+}
+
+void render_checks(Report& r, const SuiteOptions& o) {
+  auto renderer = shading::Renderer::create();
+  if (!renderer) {
+    r.checks.push_back(Check{"render", "shading: offscreen GL", true, true,
+                             "skipped: no GL context (" + renderer.error().message + ")"});
+    return;
+  }
+  for (const char* scene : {"material-grid", "fresnel", "furnace", "hdr", "underwater"}) {
+    shading::RenderRequest q;
+    q.scene = scene, q.width = o.render_width, q.height = o.render_height, q.samples = 1;
+    auto img = (*renderer)->render(q);
+    if (!img) { r.checks.push_back(failed(std::string("render/") + scene, "shading", img.error())); continue; }
+    EncodeSettings s;
+    s.target = r.target;
+    s.exposure.mode = exposure::Mode::histogram;
+    SceneInput in;
+    in.image = &img->scene_nits;
+    in.units = InputUnits::absolute;
+    auto f = encode_frame(in, s);
+    if (!f) { r.checks.push_back(failed(std::string("render/") + scene, "encode", f.error())); continue; }
+    r.checks.push_back(check_peak(*f, std::string("scene-") + scene));
+    r.checks.push_back(check_content_light(*f, std::string("scene-") + scene));
+  }
+}
+
+}  // namespace
+
+bool Report::passed() const { return failed_count() == 0; }
+
+int Report::failed_count() const {
+  int n = 0;
+  for (const auto& c : checks) n += (!c.passed && !c.skipped) ? 1 : 0;
+  return n;
+}
+
+nlohmann::json Report::to_json() const {
+  nlohmann::json j = {{"mode", mode},
+                      {"peak_nits", target.peak_nits},
+                      {"paper_white_nits", target.paper_white_nits},
+                      {"passed", passed()},
+                      {"failed", failed_count()},
+                      {"seconds", seconds},
+                      {"checks", nlohmann::json::array()}};
+  for (const auto& c : checks)
+    j["checks"].push_back({{"name", c.name}, {"source", c.source}, {"passed", c.passed}, {"skipped", c.skipped},
+                           {"detail", c.detail}});
+  return j;
+}
+
+Result<DisplayTarget> suite_target(std::string_view mode, std::optional<double> peak) {
+  const std::string m = mode == "sdr-srgb" ? "sdr" : std::string(mode);
+  const auto parsed = parse_mode(m);
+  if (!parsed) return make_error("selftest.mode", fmt::format("unknown mode '{}' (sdr-srgb, sdr-bt1886, hdr10, scrgb, hlg)", mode), "mode");
+  DisplayTarget t = default_target(*parsed);
+  if (peak) t.peak_nits = *peak;
+  if (auto ok = validate(t); !ok) return ok.error();
+  return t;
+}
+
+Report run_suite(const DisplayTarget& target, std::string_view mode_name, const SuiteOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Report r;
+  r.mode = std::string(mode_name);
+  r.target = target;
+  paper_white_checks(r);
+  primaries_checks(r);
+  ramp_checks(r);
+  for (auto& c : check_curves_monotonic(target)) r.checks.push_back(std::move(c));
+  pattern_checks(r);
+  if (o.render) render_checks(r, o);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace hdrd::patterns

@@ -1,0 +1,292 @@
+// The display-mode suite's check functions. Expected values come from the standards
+// (transfer functions of encode/transfer.hpp evaluated in double precision, and the
+// published numbers where one exists); measured values are decoded from the frame's own
+// bytes with patterns/decode.hpp.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "encode/tonemap.hpp"
+#include "encode/transfer.hpp"
+#include "patterns/decode.hpp"
+#include "patterns/selftest.hpp"
+
+namespace hdrd::patterns {
+namespace {
+
+Check make(std::string name, std::string source, bool passed, std::string detail) {
+  return Check{std::move(name), std::move(source), passed, false, std::move(detail)};
+}
+
+int max_code(const DisplayTarget& t) { return (1 << t.bits) - 1; }
+int quantize(const DisplayTarget& t, double signal) {
+  return t.range == Range::narrow ? transfer::quantize_narrow(signal, t.bits) : transfer::quantize_full(signal, t.bits);
+}
+
+// The code paper white must land on, and the source that says so.
+std::pair<int, std::string> paper_white_code(const DisplayTarget& t) {
+  const double pw = t.paper_white_nits;
+  switch (t.mode) {
+    case Mode::hdr10:
+      if (pw == 203 && t.range == Range::full && t.bits == 10)
+        return {594, "BT.2408-7 §2: 203 cd/m2 -> PQ 58 %, code 594 (10-bit full range)"};
+      return {quantize(t, transfer::pq_inverse_eotf(pw)), "SMPTE ST 2084 inverse EOTF of paper white"};
+    case Mode::hlg:
+      if (pw == 203 && t.peak_nits == 1000)
+        return {quantize(t, 0.75), "BT.2408-7 §2: 203 cd/m2 on a 1000 cd/m2 HLG display -> HLG 75 %"};
+      return {quantize(t, transfer::hlg_inverse_eotf({pw, pw, pw}, t.peak_nits).x),
+              "BT.2100 HLG inverse EOTF of paper white at the display peak"};
+    case Mode::sdr:
+    case Mode::sdr_bt1886:
+      if (pw >= t.peak_nits) return {max_code(t), "SDR: paper white is the display's white (code max)"};
+      return {quantize(t, t.mode == Mode::sdr ? transfer::srgb_inverse_eotf(pw / t.peak_nits)
+                                              : transfer::Bt1886::from_levels(t.peak_nits, t.black_nits).inverse_eotf(pw)),
+              "SDR inverse EOTF of paper white"};
+    case Mode::scrgb: break;
+  }
+  return {0, ""};
+}
+
+color::Vec3 to_rec2020(const DisplayTarget& t, color::Vec3 container) {
+  if (t.container() == color::kRec2020) return container;
+  return color::rgb_to_rgb(t.container(), color::kRec2020) * container;
+}
+
+}  // namespace
+
+Check check_paper_white(const EncodedFrame& f, const std::string& curve, int tolerance) {
+  const std::string name = "paper-white/" + curve;
+  const int cx = f.width / 2, cy = f.height / 2;
+  const PixelSignal p = read_pixel(f, cx, cy);
+  if (f.target.mode == Mode::scrgb) {
+    const double want = f.target.paper_white_nits / transfer::kScrgbUnitNits;
+    const double worst = std::max({std::abs(p.scrgb[0] - want), std::abs(p.scrgb[1] - want), std::abs(p.scrgb[2] - want)});
+    // One half-float step at 2..4 is 2^-9.
+    return make(name, fmt::format("IEC 61966-2-2 scRGB: 1.0 = 80 cd/m2, paper white {} -> {:.4f}",
+                                  f.target.paper_white_nits, want),
+                worst <= std::ldexp(1.0, -9),
+                fmt::format("({:.4f}, {:.4f}, {:.4f}) vs {:.4f}", p.scrgb[0], p.scrgb[1], p.scrgb[2], want));
+  }
+  const auto [want, source] = paper_white_code(f.target);
+  int worst = 0;
+  for (int c : p.code) worst = std::max(worst, std::abs(c - want));
+  return make(name, source, worst <= tolerance,
+              fmt::format("codes ({}, {}, {}) vs {} (tolerance {})", p.code[0], p.code[1], p.code[2], want, tolerance));
+}
+
+Check check_rec709_primaries(const EncodedFrame& f, const std::string& what) {
+  const color::Chromaticity want[3] = {color::kRec709.red, color::kRec709.green, color::kRec709.blue};
+  const color::Mat3 to_xyz = color::rgb_to_xyz(f.target.container());
+  double worst = 0;
+  std::string detail;
+  for (int i = 0; i < 3; ++i) {
+    const color::Vec3 n = decode_pixel(f, (2 * i + 1) * f.width / 6, f.height / 2);
+    const color::Vec3 xyz = to_xyz * n;
+    const double s = xyz.x + xyz.y + xyz.z;
+    const double x = s > 0 ? xyz.x / s : 0, y = s > 0 ? xyz.y / s : 0;
+    worst = std::max({worst, std::abs(x - want[i].x), std::abs(y - want[i].y)});
+    detail += fmt::format("{}({:.4f},{:.4f}) ", "RGB"[i], x, y);
+  }
+  // 10-bit quantisation of a primary moves its chromaticity by a few 1e-4.
+  return make("rec709-primaries/" + what, "BT.709 primaries carried in the BT.2020 container (BT.2087)",
+              worst <= 0.003, detail + fmt::format("max deviation {:.4f} (limit 0.003)", worst));
+}
+
+Check check_peak(const EncodedFrame& f, const std::string& what) {
+  const DisplayTarget& t = f.target;
+  const std::string name = "peak/" + what;
+  if (t.mode == Mode::hdr10) {
+    const int limit = quantize(t, transfer::pq_inverse_eotf(t.peak_nits));
+    int highest = 0;
+    for (int y = 0; y < f.height; ++y)
+      for (int x = 0; x < f.width; ++x)
+        for (int c : read_pixel(f, x, y).code) highest = std::max(highest, c);
+    return make(name, "ST 2084: no code above the display peak's code", highest <= limit,
+                fmt::format("highest code {} vs peak code {} ({} cd/m2)", highest, limit, t.peak_nits));
+  }
+  double highest = 0;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const color::Vec3 n = to_rec2020(t, decode_pixel(f, x, y));
+      highest = std::max({highest, n.x, n.y, n.z});
+    }
+  // One code step near the peak (10-bit HLG, 8-bit SDR) or half-float rounding.
+  const double tolerance = t.mode == Mode::scrgb ? 1e-3 : (t.bits == 8 ? 0.01 : 0.005);
+  return make(name, "display light never above the display peak (REFERENCE.md §1.4)",
+              highest <= t.peak_nits * (1 + tolerance),
+              fmt::format("brightest channel {:.2f} cd/m2 vs peak {} cd/m2", highest, t.peak_nits));
+}
+
+ContentLightLevel decode_content_light(const EncodedFrame& f) {
+  double max_cll = 0, sum = 0;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const color::Vec3 n = to_rec2020(f.target, decode_pixel(f, x, y));
+      const double m = std::max({n.x, n.y, n.z, 0.0});
+      max_cll = std::max(max_cll, m);
+      sum += m;
+    }
+  const double count = double(f.width) * f.height;
+  return {max_cll, count > 0 ? sum / count : 0};
+}
+
+Check check_content_light(const EncodedFrame& f, const std::string& what) {
+  const std::string name = "content-light/" + what;
+  if (!f.target.is_hdr()) {
+    Check c = make(name, "CTA-861.3 (HDR modes only)", true, "SDR frame: no content light level");
+    c.skipped = true;
+    return c;
+  }
+  const ContentLightLevel mine = decode_content_light(f);
+  auto close = [](double a, double b) { return std::abs(a - b) <= 0.01 + 2e-3 * std::max(a, b); };
+  const bool ok = close(mine.max_cll_nits, f.content_light.max_cll_nits) &&
+                  close(mine.max_fall_nits, f.content_light.max_fall_nits);
+  return make(name, "CTA-861.3 §A: MaxCLL = max of max(R,G,B), MaxFALL = max frame mean, decoded from the codes", ok,
+              fmt::format("frame says {:.2f}/{:.2f}, decoded {:.2f}/{:.2f} cd/m2", f.content_light.max_cll_nits,
+                          f.content_light.max_fall_nits, mine.max_cll_nits, mine.max_fall_nits));
+}
+
+Check check_metadata_blob(const EncodedFrame& f, std::span<const std::uint8_t> b) {
+  const std::string name = "metadata-blob";
+  const std::string source = "CTA-861-G §6.9 Table 44/45, linux struct hdr_output_metadata (little-endian)";
+  if (b.size() != 32) return make(name, source, false, fmt::format("{} bytes, want 32", b.size()));
+  auto u16 = [&](std::size_t at) { return int(b[at]) | (int(b[at + 1]) << 8); };
+  const std::uint32_t type = b[0] | (b[1] << 8) | (b[2] << 16) | (std::uint32_t(b[3]) << 24);
+  const int want_eotf = f.target.mode == Mode::hlg ? 3 : 2;
+  std::vector<std::string> bad;
+  if (type != 0 || b[5] != 0) bad.push_back("static metadata type is not 1 (value 0)");
+  if (b[4] != want_eotf) bad.push_back(fmt::format("EOTF byte {} want {}", b[4], want_eotf));
+  const MasteringDisplay& m = f.mastering;
+  const color::Chromaticity xy[4] = {m.primaries.red, m.primaries.green, m.primaries.blue, m.primaries.white};
+  for (int i = 0; i < 4; ++i) {
+    const int wx = int(std::lround(xy[i].x / 0.00002)), wy = int(std::lround(xy[i].y / 0.00002));
+    if (std::abs(u16(6 + 4 * i) - wx) > 1 || std::abs(u16(8 + 4 * i) - wy) > 1)
+      bad.push_back(fmt::format("chromaticity {} is ({}, {}) want ({}, {})", i, u16(6 + 4 * i), u16(8 + 4 * i), wx, wy));
+  }
+  if (u16(22) != int(std::lround(m.max_nits))) bad.push_back(fmt::format("max luminance {} want {}", u16(22), m.max_nits));
+  if (std::abs(u16(24) - int(std::lround(m.min_nits * 10000))) > 1)
+    bad.push_back(fmt::format("min luminance {} want {}", u16(24), m.min_nits * 10000));
+  const ContentLightLevel mine = decode_content_light(f);
+  auto want_level = [&](double v) { return v > 0 ? int(std::ceil(v - 1e-6)) : int(std::lround(m.max_nits)); };
+  if (std::abs(u16(26) - want_level(mine.max_cll_nits)) > 1) bad.push_back(fmt::format("MaxCLL {} want {}", u16(26), want_level(mine.max_cll_nits)));
+  if (std::abs(u16(28) - want_level(mine.max_fall_nits)) > 1) bad.push_back(fmt::format("MaxFALL {} want {}", u16(28), want_level(mine.max_fall_nits)));
+  std::string detail = bad.empty() ? fmt::format("EOTF {}, max {} cd/m2, MaxCLL {}, MaxFALL {}", b[4], u16(22), u16(26), u16(28)) : "";
+  for (const auto& s : bad) detail += (detail.empty() ? "" : "; ") + s;
+  return make(name, source, bad.empty(), detail);
+}
+
+Check check_png(const EncodedFrame& f, const io::PngInfo& png) {
+  const DisplayTarget& t = f.target;
+  std::vector<std::string> bad;
+  if (png.width != f.width || png.height != f.height) bad.push_back("size differs from the frame");
+  const int want_depth = t.bits == 8 ? 8 : 16;
+  if (png.bit_depth != want_depth) bad.push_back(fmt::format("bit depth {} want {}", png.bit_depth, want_depth));
+  // H.273: primaries 9 = BT.2020, 1 = BT.709; transfer 16 = PQ, 18 = HLG, 13 = sRGB,
+  // 4 = gamma 2.2, 1 = BT.709 (BT.1886 display); matrix 0 = RGB; range flag 1 = full.
+  std::uint8_t prim = t.is_hdr() ? 9 : 1, tc = 13;
+  if (t.mode == Mode::hdr10) tc = 16;
+  if (t.mode == Mode::hlg) tc = 18;
+  if (t.mode == Mode::sdr && t.sdr_curve == SdrCurve::gamma22) tc = 4;
+  if (t.mode == Mode::sdr_bt1886) tc = 1;
+  const std::array<std::uint8_t, 4> want{prim, tc, 0, std::uint8_t(t.range == Range::full ? 1 : 0)};
+  if (want_depth == 16 && !png.cicp) bad.push_back("no cICP chunk");
+  if (png.cicp && *png.cicp != want)
+    bad.push_back(fmt::format("cICP {},{},{},{} want {},{},{},{}", (*png.cicp)[0], (*png.cicp)[1], (*png.cicp)[2],
+                              (*png.cicp)[3], want[0], want[1], want[2], want[3]));
+  if (t.mode == Mode::hdr10 || t.mode == Mode::hlg) {
+    auto be32 = [](const std::vector<std::uint8_t>& v, std::size_t at) {
+      return (std::uint32_t(v[at]) << 24) | (std::uint32_t(v[at + 1]) << 16) | (std::uint32_t(v[at + 2]) << 8) | v[at + 3];
+    };
+    if (!png.mdcv || png.mdcv->size() != 24) bad.push_back("no 24-byte mDCV chunk");
+    else if (std::llabs(std::int64_t(be32(*png.mdcv, 16)) - std::llround(f.mastering.max_nits * 10000)) > 1)
+      bad.push_back(fmt::format("mDCV max luminance {} want {}", be32(*png.mdcv, 16), f.mastering.max_nits * 10000));
+    if (!png.clli || png.clli->size() != 8) bad.push_back("no 8-byte cLLI chunk");
+    else {
+      const ContentLightLevel mine = decode_content_light(f);
+      const double cll = be32(*png.clli, 0) / 10000.0, fall = be32(*png.clli, 4) / 10000.0;
+      if (std::abs(cll - mine.max_cll_nits) > 1.0 || std::abs(fall - mine.max_fall_nits) > 1.0)
+        bad.push_back(fmt::format("cLLI {}/{} vs decoded {:.2f}/{:.2f}", cll, fall, mine.max_cll_nits, mine.max_fall_nits));
+    }
+  }
+  std::string detail = bad.empty() ? fmt::format("{}-bit, cICP {},{},{},{}", png.bit_depth, want[0], want[1], want[2], want[3]) : "";
+  for (const auto& s : bad) detail += (detail.empty() ? "" : "; ") + s;
+  return make("png-chunks", "PNG 3rd edition cICP/mDCV/cLLI, ITU-T H.273 code points", bad.empty(), detail);
+}
+
+Check check_exr(const EncodedFrame& f, const io::ExrImage& exr) {
+  std::vector<std::string> bad;
+  const DisplayTarget& t = f.target;
+  if (!exr.chromaticities || *exr.chromaticities != t.container()) bad.push_back("chromaticities are not the container's");
+  const double white = t.mode == Mode::scrgb ? transfer::kScrgbUnitNits : t.paper_white_nits;
+  if (!exr.white_luminance || std::abs(*exr.white_luminance - white) > 1e-3)
+    bad.push_back(fmt::format("whiteLuminance {} want {}", exr.white_luminance.value_or(-1), white));
+  if (!exr.attributes.count("mode")) bad.push_back("no mode attribute");
+  if (exr.image.width != f.width || exr.image.height != f.height) bad.push_back("size differs");
+  else {
+    double worst = 0;
+    for (int y = 0; y < f.height; y += std::max(1, f.height / 8))
+      for (int x = 0; x < f.width; x += std::max(1, f.width / 8)) {
+        const color::Vec3 n = decode_pixel(f, x, y);
+        const float* p = exr.image.px(x, y);
+        for (int c = 0; c < 3; ++c) {
+          const double stored = p[c] * white, want = n[c];
+          // Half floats and one code of quantisation: 1 % or 0.05 cd/m2.
+          worst = std::max(worst, std::abs(stored - want) / std::max(0.05 / 0.01, std::abs(want)));
+        }
+      }
+    if (worst > 0.01) bad.push_back(fmt::format("pixels differ from the decoded codes by {:.2f} %", worst * 100));
+  }
+  std::string detail = bad.empty() ? fmt::format("chromaticities = container, whiteLuminance {}", white) : "";
+  for (const auto& s : bad) detail += (detail.empty() ? "" : "; ") + s;
+  return make("exr-attributes", "OpenEXR chromaticities/whiteLuminance (docs/dump-format.md)", bad.empty(), detail);
+}
+
+std::vector<Check> check_curves_monotonic(const DisplayTarget& t) {
+  std::vector<Check> out;
+  const tonemap::Display d{t.peak_nits, t.black_nits, t.paper_white_nits};
+  for (const auto& info : tonemap::curves()) {
+    auto curve = tonemap::prepare(info.name, d);
+    const std::string name = "monotonic/" + std::string(info.name);
+    if (!curve) {
+      out.push_back(make(name, std::string(info.source), false, curve.error().message));
+      continue;
+    }
+    double prev = 0, worst_drop = 0, top = 0;
+    for (int i = 0; i <= 400; ++i) {
+      const double x = std::pow(10.0, -4 + 8.0 * i / 400);  // 1e-4 .. 1e4 relative
+      const double y = (*curve)->map(x);
+      if (!std::isfinite(y)) { worst_drop = INFINITY; break; }
+      worst_drop = std::max(worst_drop, prev - y);
+      prev = std::max(prev, y);
+      top = std::max(top, y);
+    }
+    const bool ok = worst_drop <= 1e-9 * std::max(1.0, top) && top <= d.max_y() * (1 + 1e-6);
+    out.push_back(make(name, "tone curves are non-decreasing and within the display maximum (REFERENCE.md §1.3)", ok,
+                       fmt::format("largest drop {:.3g}, max {:.4g} vs display max {:.4g} (paper-white units)",
+                                   worst_drop, top, d.max_y())));
+  }
+  return out;
+}
+
+Check check_window(const EncodedFrame& f, double level_nits) {
+  const DisplayTarget& t = f.target;
+  const PixelSignal p = read_pixel(f, f.width / 2, f.height / 2);
+  const double target_nits = std::min(level_nits, t.peak_nits);
+  int want = 0;
+  if (t.mode == Mode::hdr10) want = quantize(t, transfer::pq_inverse_eotf(target_nits));
+  else if (t.mode == Mode::hlg) want = quantize(t, transfer::hlg_inverse_eotf({target_nits, target_nits, target_nits}, t.peak_nits).x);
+  else if (t.mode == Mode::sdr) want = quantize(t, transfer::srgb_inverse_eotf(target_nits / t.peak_nits));
+  else if (t.mode == Mode::sdr_bt1886) want = quantize(t, transfer::Bt1886::from_levels(t.peak_nits, t.black_nits).inverse_eotf(target_nits));
+  else {
+    const double v = p.scrgb[0] * transfer::kScrgbUnitNits;
+    return make("window", "IEC 61966-2-2: scRGB value x 80 = cd/m2", std::abs(v - target_nits) <= 2e-3 * target_nits,
+                fmt::format("{:.2f} cd/m2 vs {:.2f}", v, target_nits));
+  }
+  int worst = 0;
+  for (int c : p.code) worst = std::max(worst, std::abs(c - want));
+  return make("window", "window level within 1 code of the requested luminance (transfer of the mode)", worst <= 1,
+              fmt::format("codes ({}, {}, {}) vs {} for {} cd/m2", p.code[0], p.code[1], p.code[2], want, target_nits));
+}
+
+}  // namespace hdrd::patterns
