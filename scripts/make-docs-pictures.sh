@@ -1,0 +1,34 @@
+#!/bin/sh
+# Regenerates the pictures in docs/img/ (linked from README.md, docs/patterns.md and
+# docs/display-modes.md) with the built hdrd. Usage:
+#   scripts/make-docs-pictures.sh [path/to/hdrd]     (default: build/tools/hdrd)
+# Needs ../shared/fixtures/exr for the contact sheet and heatmap (skipped without it).
+set -eu
+here=$(cd "$(dirname "$0")/.." && pwd)
+hdrd=${1:-$here/build/tools/hdrd}
+img=$here/docs/img
+shared=${HDRD_SHARED_DIR:-$here/../shared}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$img"
+
+"$hdrd" plot curves --peak 1000 -o "$img/tone-curves-1000.svg" -q
+"$hdrd" plot curves --peak 1000 -o "$img/tone-curves-1000.png" -q
+"$hdrd" plot curves --peak 400 -o "$img/tone-curves-400.svg" -q
+"$hdrd" plot fresnel -o "$img/fresnel-metals.svg" -q
+"$hdrd" plot fresnel -o "$img/fresnel-metals.png" -q
+# Patterns: the PNG dumps are 16-bit PQ/HLG files with cICP (HDR-aware viewers show them right).
+"$hdrd" pattern bt2111 --mode hdr10 --width 480 --height 270 --format png -o "$tmp/bars-pq" -q
+cp "$tmp/bars-pq.png" "$img/bt2111-pq.png"
+"$hdrd" pattern pq-ramp --mode hdr10 --peak 10000 --width 880 --height 120 --format png -o "$tmp/ramp" -q
+cp "$tmp/ramp.png" "$img/pq-ramp.png"
+"$hdrd" pattern clipping --mode hdr10 --peak 10000 --level 1000 --width 720 --height 160 --format png -o "$tmp/clip" -q
+cp "$tmp/clip.png" "$img/clipping-1000.png"
+if [ -f "$shared/fixtures/exr/Desk.exr" ]; then
+  "$hdrd" contact-sheet "$shared/fixtures/exr/Desk.exr" -o "$img/contact-sheet-desk.png" --tile-width 200 -q
+  "$hdrd" plot heatmap "$shared/fixtures/exr/Desk.exr" --mode hdr10 --peak 1000 --max-width 480 \
+    -o "$img/heatmap-desk.png" -q
+else
+  echo "make-docs-pictures: $shared/fixtures/exr/Desk.exr missing: contact sheet and heatmap skipped" >&2
+fi
+ls -l "$img"

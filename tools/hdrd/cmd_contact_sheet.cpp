@@ -1,0 +1,89 @@
+// hdrd contact-sheet INPUT.exr -o sheet.png: one image through every tone curve as an SDR
+// preview, labelled, side by side (as RTR4 fig. 8.15 compares four tone mappers).
+#include <filesystem>
+
+#include "encode/io.hpp"
+#include "encode/pipeline.hpp"
+#include "encode/tonemap.hpp"
+#include "patterns/plot.hpp"
+#include "tools/hdrd/command.hpp"
+#include "tools/hdrd/pipeline_options.hpp"
+
+namespace hdrd::cli {
+namespace {
+
+struct SheetOptions {
+  CommonOptions common;
+  PipelineOptions pipeline;
+  std::string input, output;
+  int tile_width = 320;
+  int columns = 4;
+};
+
+void run(const SheetOptions& o) {
+  set_progress_enabled(!o.common.quiet);
+  std::vector<std::string> notes;
+  PipelineOptions po = o.pipeline;
+  if (po.mode == "hdr10") po.mode = "sdr";  // the default here is an SDR preview
+  EncodeSettings base = build_settings(po, exposure::Mode::manual, &notes);
+  if (base.target.mode != Mode::sdr && base.target.mode != Mode::sdr_bt1886)
+    throw CliError("contact sheets are SDR previews: use --mode sdr or sdr-bt1886 (--peak sets the tone curves' display)");
+  base.target.bits = 8;
+  if (!o.pipeline.tonemap.empty()) notes.push_back("--tonemap is ignored: the sheet shows every curve");
+  auto exr = io::read_exr(o.input);
+  if (!exr) throw HdrdError(exr.error());
+  const Image small = patterns::downscale(exr->image, o.tile_width);
+  SceneInput in;
+  in.image = &small;
+  in.to_working = exr->to_working();
+  in.units = exr->white_luminance ? InputUnits::absolute : InputUnits::relative;
+  in.white_luminance_nits = exr->white_luminance.value_or(1.0);
+
+  std::vector<EncodedFrame> frames;
+  std::vector<patterns::SheetTile> tiles;
+  frames.reserve(tonemap::curves().size());
+  for (const auto& info : tonemap::curves()) {
+    EncodeSettings s = base;
+    s.tone.curve = std::string(info.name);
+    auto f = encode_frame(in, s);
+    if (f) {
+      frames.push_back(std::move(*f));
+      tiles.push_back({std::string(info.name), nullptr, {}});
+    } else {
+      tiles.push_back({std::string(info.name), nullptr, f.error().message});
+      notes.push_back(std::string(info.name) + ": " + f.error().message);
+    }
+  }
+  for (std::size_t i = 0, k = 0; i < tiles.size(); ++i)
+    if (tiles[i].error.empty()) tiles[i].frame = &frames[k++];
+  const auto title = fmt::format("{}  EXPOSURE {:+g} EV, SDR {:g} CD/M2", std::filesystem::path(o.input).filename().string(),
+                                 o.pipeline.exposure_ev, base.target.peak_nits);
+  auto png = patterns::contact_sheet(tiles, title, o.columns).png();
+  if (!png) throw HdrdError(png.error());
+  if (auto ok = io::atomic_write(o.output, *png); !ok) throw HdrdError(ok.error());
+  nlohmann::json j = {{"output", o.output}, {"curves", nlohmann::json::array()}, {"notes", notes}};
+  for (const auto& t : tiles) j["curves"].push_back(t.label);
+  print_out(o.common.json ? j.dump(2) : fmt::format("wrote {} ({} curves)\n", o.output, tiles.size()));
+}
+
+void setup(CLI::App& root) {
+  auto o = std::make_shared<SheetOptions>();
+  auto* app = root.add_subcommand("contact-sheet", "One EXR through every tone curve, labelled, as an SDR preview PNG");
+  app->add_option("input", o->input, "Input OpenEXR")->required();
+  app->add_option("-o,--output", o->output, "Output PNG")->required();
+  app->add_option("--tile-width", o->tile_width, "Width of each tile (default 320)");
+  app->add_option("--columns", o->columns, "Tiles per row (default 4)");
+  add_pipeline_options(*app, o->pipeline);
+  add_common_options(*app, o->common);
+  app->footer(
+      "Examples:\n"
+      "  hdrd contact-sheet Desk.exr -o desk-sheet.png\n"
+      "  hdrd contact-sheet Desk.exr -o sheet.png --exposure -1 --tile-width 240 --columns 5\n"
+      "The default mode here is sdr (an sRGB preview); exposure options apply to every tile.");
+  app->callback([o] { run(*o); });
+}
+
+}  // namespace
+}  // namespace hdrd::cli
+
+HDRD_REGISTER_COMMAND("contact-sheet", 51, &hdrd::cli::setup)
