@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <thread>
 
 #include "shading/brdf.hpp"
 #include "shading/materials.hpp"
@@ -373,6 +374,38 @@ TEST(Render, SurfacelessPlatformWorksToo) {
   auto f = (*r)->render(q);
   ASSERT_TRUE(f.ok()) << f.error().message;
   EXPECT_EQ(f->scene_name, default_scene_name());
+}
+
+TEST(Render, RenderersOnSeveralThreadsAtOnce) {
+  HDRD_REQUIRE_RENDERER(renderer);
+  // The daemon keeps one renderer per worker thread: two contexts rendering at the same
+  // time must give the frames one renderer gives alone.
+  RenderRequest q;
+  q.scene = "underwater";
+  q.width = 64;
+  q.height = 36;
+  auto reference = renderer.render(q);
+  ASSERT_TRUE(reference.ok());
+  std::vector<std::unique_ptr<Renderer>> renderers;
+  for (int i = 0; i < 2; ++i) {
+    auto r = Renderer::create(Backend::automatic);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    renderers.push_back(std::move(*r));
+  }
+  std::vector<Result<RenderResult>> results(4, make_error("x", "not run"));
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&, t] {
+      for (int k = 0; k < 2; ++k) results[t * 2 + k] = renderers[t]->render(q);
+    });
+  for (auto& t : threads) t.join();
+  for (const auto& r : results) {
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r->scene_nits.rgba, reference->scene_nits.rgba);
+  }
+  // A renderer may also move between threads (one at a time).
+  std::thread([&] { EXPECT_TRUE(renderer.render(q).ok()); }).join();
+  EXPECT_TRUE(renderer.render(q).ok());
 }
 
 TEST(Render, RejectsBadRequestsWithClearErrors) {
