@@ -85,11 +85,17 @@ std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
   return v;
 }
 
-// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up.
-std::vector<std::uint8_t> clli_for(const ContentLightLevel& l) {
+// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up. 0 means "unknown" and some
+// displays misbehave on it, so a value that would be 0 becomes the mastering peak
+// (REFERENCE.md §6), as in the KMS metadata blob (display/hdr_metadata.cpp).
+std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
-  put_u32(v, to_units(l.max_cll_nits, 0.0001, 4294967295.0, true));
-  put_u32(v, to_units(l.max_fall_nits, 0.0001, 4294967295.0, true));
+  auto carried = [&](double nits) {
+    const auto units = to_units(nits, 0.0001, 4294967295.0, true);
+    return units != 0 ? units : to_units(m.max_nits, 0.0001, 4294967295.0, true);
+  };
+  put_u32(v, carried(l.max_cll_nits));
+  put_u32(v, carried(l.max_fall_nits));
   return v;
 }
 
@@ -237,7 +243,7 @@ Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame) {
   const Mode mode = frame.target.mode;
   if (mode == Mode::hdr10 || mode == Mode::hlg) {
     job.mdcv = mdcv_for(frame.mastering);
-    job.clli = clli_for(frame.content_light);
+    job.clli = clli_for(frame.content_light, frame.mastering);
   } else if (mode == Mode::sdr) {
     job.legacy = frame.target.sdr_curve == SdrCurve::srgb ? PngWriteJob::Legacy::srgb : PngWriteJob::Legacy::gamma22;
   } else {

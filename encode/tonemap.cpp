@@ -428,7 +428,9 @@ bool register_curve(ToneCurveInfo info) {
 
 Result<ParamValues> resolve_params(const ToneCurveInfo& info, const ParamValues& given) {
   ParamValues out;
-  for (const auto& [name, value] : given) {
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // (clang 14 cannot capture structured bindings)
+    const double value = entry.second;
     const auto it = std::find_if(info.params.begin(), info.params.end(),
                                  [&](const ParamSpec& s) { return s.name == name; });
     if (it == info.params.end()) {
