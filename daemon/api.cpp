@@ -122,6 +122,12 @@ std::string generated_name(std::string_view prefix, std::uint64_t id) {
                      ::getpid(), id);
 }
 
+// The coalescing key: the canonical request (strings from query parameters may hold
+// invalid UTF-8; they are replaced rather than thrown over).
+std::string canonical_key(const Request& r) {
+  return r.canonical().dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
 // Encodes a scene-referred input and answers in the negotiated form.
 Reply encode_and_reply(const SceneInput& in, const Request& req, OutputKind output, const std::string& dump_name,
                        const Config& cfg, exposure::Mode default_exposure, std::vector<std::string> warnings,
@@ -437,7 +443,7 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
                                   cfg->limits.max_request_seconds);
   JobSpec spec;
   spec.deadline = http.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
-  if (!st->request.dump) spec.key = st->request.canonical().dump() + "|" + std::string(content_type(*output));
+  if (!st->request.dump) spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output));
   Metrics* metrics = &metrics_;
   spec.render = [st, metrics](RenderResource* res, const JobControl&) -> Result<void> {
     auto* rr = dynamic_cast<RendererResource*>(res);
@@ -568,7 +574,7 @@ void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responde
   JobSpec spec;
   spec.deadline = http.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
   if (!st->request.dump)
-    spec.key = st->request.canonical().dump() + "|" + std::string(content_type(*output)) +
+    spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output)) +
                fmt::format("|exr:{}:{:016x}", st->exr.size(), fnv1a(st->exr));
   Metrics* metrics = &metrics_;
   spec.finish = [st, metrics](const JobControl& control) -> Reply {

@@ -35,7 +35,9 @@ struct ConnectionInfo {
   std::optional<PeerCred> peer;
 };
 
-// MHD needs C callbacks; these forward to the server through a friend.
+// Oversized bodies up to this much beyond the limit are read and dropped before the 413.
+constexpr unsigned long long kDrainLimitBytes = 16ull << 20;
+
 Reply too_large_reply(std::size_t limit) {
   return Reply::error(make_error("request.too_large",
                                  fmt::format("request body exceeds the limit of {} bytes", limit)));
@@ -268,7 +270,15 @@ int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, co
     if (const auto* cl = req.header("content-length")) {
       char* end = nullptr;
       const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
-      if (end && *end == '\0' && n > ctx->limit) return queue(c, *ctx, too_large_reply(ctx->limit));
+      if (end && *end == '\0' && n > ctx->limit) {
+        // A client that waits for "100 Continue", or one about to send far too much, is
+        // answered at once (and the connection closed). A modestly oversized body is read
+        // and dropped first, so that simple clients which send before they read still
+        // see the 413 instead of a broken pipe.
+        const std::string* expect = req.header("expect");
+        if (expect || n > ctx->limit + kDrainLimitBytes) return queue(c, *ctx, too_large_reply(ctx->limit));
+        ctx->too_large = true;
+      }
     }
     return MHD_YES;
   }

@@ -7,20 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "daemon/accept.hpp"
 #include "daemon/reply.hpp"
 #include "daemon/request.hpp"
 #include "encode/frame.hpp"
 #include "encode/pipeline.hpp"
 
 namespace hdrd::daemon {
-
-enum class OutputKind { png, exr, raw, json_dump };
-std::string_view content_type(OutputKind k);
-
-// Picks the response format from the Accept header (RFC 9110 §12.5.1; q-values honoured,
-// q=0 refuses). Without Accept (or */*): PNG, or EXR for scrgb, which has no PNG form;
-// with "dump": true the answer is always JSON. Error request.not_acceptable (406).
-Result<OutputKind> negotiate_output(const std::string* accept, Mode mode, bool dump);
 
 // The request's display target once "auto" / an EDID file have been applied (the request's
 // explicit fields still override what the display says). display.unavailable when the
