@@ -96,7 +96,7 @@ Rgb eval(const CubeFile& cube, Rgb in, Interpolation interp);
 struct ShaperSpec {
   grade::Shaper kind = grade::Shaper::pq;
   double min = 0;    // log2: lowest stop; otherwise 0
-  double max = 100;  // log2: highest stop; pq/sqrt/sqrt_sqrt: relative value mapped to 1
+  double max = 100;  // log2: highest stop; pq: input mapped to PQ 1.0 (10000 cd/m2); sqrt*: input mapped to 1
   static ShaperSpec defaults(grade::Shaper kind);
   friend bool operator==(const ShaperSpec&, const ShaperSpec&) = default;
 };

@@ -9,6 +9,8 @@
 #include <optional>
 #include <random>
 
+#include <hwy/targets.h>
+
 #include "encode/lut.hpp"
 #include "encode/ocio.hpp"
 #include "tests/grade/grade_testing.hpp"
@@ -178,6 +180,37 @@ TEST(Apply, OneDimensionalAndShaperFilesMatchOpenColorIO) {
         ASSERT_LE(max_abs_diff(eval(*c, col, interp), ocio_ref.apply(col)), 1e-5f) << path;
     }
   }
+}
+
+// Every kernel compiled into the binary that this CPU can run (SSSE3/SSE4/AVX2/AVX-512,
+// the scalar fallback) gives the reference result: dynamic dispatch is exercised, not just
+// the best target.
+TEST(Apply, EveryCompiledTargetMatchesReference) {
+  std::mt19937 rng(9);
+  const Lut3D l = grade_testing::random_lut3d(9, rng);
+  const auto colours = random_colours(203, -0.2f, 1.2f, rng);
+  const auto targets = hwy::SupportedAndGeneratedTargets();
+  EXPECT_GE(targets.size(), 2u);
+  for (const auto target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    EXPECT_EQ(simd_target_name(), hwy::TargetName(target));
+    for (auto interp : kBoth) {
+      auto px = to_rgba(colours);
+      Applier3D(l, interp).apply(px.data(), colours.size());
+      for (std::size_t i = 0; i < colours.size(); ++i)
+        ASSERT_LE(max_abs_diff({px[4 * i], px[4 * i + 1], px[4 * i + 2]}, eval(l, colours[i], interp)), 2e-6f)
+            << hwy::TargetName(target) << " " << to_string(interp);
+    }
+    // The PQ buffer shaper goes through the same dispatch.
+    const ShaperTable pq(ShaperSpec{grade::Shaper::pq, 0, 10000});
+    const std::vector<float> nits = {0, 0.005f, 1, 203, 1000, 10000, 20000, -1, NAN, 26, 100, 4000};
+    std::vector<float> px;
+    for (float v : nits) px.insert(px.end(), {v, v, v, 1.0f});
+    pq.forward_rgba(px.data(), nits.size());
+    for (std::size_t i = 0; i < nits.size(); ++i)
+      EXPECT_NEAR(px[4 * i + 1], pq.forward(nits[i]), 1e-7) << hwy::TargetName(target) << " " << nits[i];
+  }
+  hwy::SetSupportedTargetsForTest(0);
 }
 
 TEST(Apply, SimdTargetIsReported) {
