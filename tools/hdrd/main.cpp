@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "encode/ocio.hpp"
 #include "encode/result.hpp"
 #include "tools/hdrd/command.hpp"
 
@@ -39,6 +40,8 @@ void print_out(const std::string& text) {
 
 int main(int argc, char** argv) {
   using namespace hdrd::cli;
+  // OpenColorIO's ACES output transforms join the tone-curve registry (aces-ocio-*).
+  hdrd::ocio::register_tone_curves();
   CLI::App app{"hdrd: headless HDR display-output service (render, encode, inspect displays)", "hdrd"};
   app.require_subcommand(1);
   app.set_version_flag("--version", HDRD_VERSION_STRING);
