@@ -4,6 +4,8 @@
 // here before use, because tinygltf does not promise it.
 #include <tiny_gltf.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -88,6 +90,57 @@ bool confined_read(std::vector<unsigned char>* out, std::string* err, const std:
   return tinygltf::ReadWholeFile(out, err, path, nullptr);
 }
 bool no_write(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
+
+// ---- Checks tinygltf 2.7.0 skips ----------------------------------------------------------
+// It hands an image's bufferView to the image decoder without checking that the view
+// lies inside its buffer: a view past the end of a shorter buffer made stb_image read
+// past the heap block (found by tests/fuzz/gltf_fuzz.cpp, corpus file
+// tinygltf-image-view-past-buffer.glb). So bufferView ranges are checked against the
+// buffers' byteLength (which tinygltf does enforce on the data) before it runs.
+std::optional<std::string_view> gltf_json_text(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), "glTF", 4) != 0)
+    return std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  if (bytes.size() < 20) return std::nullopt;
+  std::uint32_t json_len = 0;
+  std::memcpy(&json_len, bytes.data() + 12, 4);
+  if (std::memcmp(bytes.data() + 16, "JSON", 4) != 0 || json_len > bytes.size() - 20) return std::nullopt;
+  return std::string_view(reinterpret_cast<const char*>(bytes.data()) + 20, json_len);
+}
+
+Result<void> check_buffer_views(std::span<const std::uint8_t> bytes) {
+  const auto text = gltf_json_text(bytes);
+  if (!text) return {};  // a broken GLB container: tinygltf reports it
+  const auto j = nlohmann::json::parse(*text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return {};  // tinygltf reports the syntax error
+  const auto length = [](const nlohmann::json& o, const char* key) -> std::optional<std::uint64_t> {
+    const auto it = o.find(key);
+    if (it == o.end()) return std::uint64_t{0};
+    if (!it->is_number_unsigned()) return std::nullopt;
+    return it->get<std::uint64_t>();
+  };
+  std::vector<std::uint64_t> buffers;
+  if (const auto b = j.find("buffers"); b != j.end() && b->is_array())
+    for (const auto& e : *b) {
+      const auto n = e.is_object() ? length(e, "byteLength") : std::nullopt;
+      if (!n) return gltf_error("buffers: byteLength must be a non-negative integer");
+      buffers.push_back(*n);
+    }
+  const auto views = j.find("bufferViews");
+  if (views == j.end() || !views->is_array()) return {};
+  for (std::size_t i = 0; i < views->size(); ++i) {
+    const auto& v = (*views)[i];
+    const auto buffer = v.is_object() ? v.find("buffer") : v.end();
+    const auto offset = v.is_object() ? length(v, "byteOffset") : std::nullopt;
+    const auto size = v.is_object() ? length(v, "byteLength") : std::nullopt;
+    if (!v.is_object() || buffer == v.end() || !buffer->is_number_unsigned() || !offset || !size ||
+        buffer->get<std::uint64_t>() >= buffers.size())
+      return gltf_error(fmt::format("bufferViews[{}]: needs a valid buffer, byteOffset and byteLength", i));
+    if (*offset > buffers[buffer->get<std::uint64_t>()] || *size > buffers[buffer->get<std::uint64_t>()] - *offset)
+      return gltf_error(fmt::format("bufferViews[{}]: bytes {}..{} lie outside buffer {} ({} bytes)", i, *offset,
+                                    *offset + *size, buffer->get<std::uint64_t>(), buffers[buffer->get<std::uint64_t>()]));
+  }
+  return {};
+}
 
 // ---- Accessors ---------------------------------------------------------------------------------
 struct AccessorView {
@@ -491,6 +544,7 @@ Result<tinygltf::Model> parse(std::span<const std::uint8_t> bytes, const std::fi
                               const SceneLoadOptions& options, std::vector<std::string>& warnings) {
   if (bytes.size() > kMaxFileBytes) return gltf_error("glTF file is larger than 1 GiB");
   if (bytes.empty()) return gltf_error("glTF file is empty");
+  if (auto ok = check_buffer_views(bytes); !ok) return ok.error();
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&guarded_image_loader, nullptr);
   std::error_code ec;

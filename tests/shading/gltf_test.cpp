@@ -235,6 +235,11 @@ TEST(Gltf, MalformedInputGivesClearErrors) {
     "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]})");
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("non-degenerate"), std::string::npos) << r.error().message;
+  // A buffer view past the end of its buffer (tinygltf 2.7.0 would hand it to stb_image).
+  r = load(R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}],
+    "bufferViews":[{"buffer":0,"byteOffset":8,"byteLength":8}],"images":[{"bufferView":0,"mimeType":"image/png"}]})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("outside buffer 0"), std::string::npos) << r.error().message;
   // A node cycle.
   r = load(R"({"asset":{"version":"2.0"},"nodes":[{"children":[1]},{"children":[0]}],"scenes":[{"nodes":[0]}]})");
   ASSERT_FALSE(r.ok());
