@@ -67,6 +67,36 @@ BENCHMARK(BM_Render)
     ->Iterations(3)
     ->UseRealTime();
 
+// Peak resident memory of a 4K frame by sample count and target format. maxrss is a
+// process high-water mark: run each case alone, e.g.
+//   bench_render --benchmark_filter='BM_Memory4k/samples:1/fp16:0'
+void BM_Memory4k(benchmark::State& state) {
+  Renderer* r = renderer();
+  if (!r) return state.SkipWithError("no GL context");
+  RenderRequest q;
+  q.scene = "material-grid";
+  q.width = 3840;
+  q.height = 2160;
+  q.samples = static_cast<int>(state.range(0));
+  q.target = state.range(1) ? TargetFormat::rgba16f : TargetFormat::rgba32f;
+  const double before = maxrss_mib();
+  double gpu = 0;
+  for (auto _ : state) {
+    auto f = r->render(q);
+    if (!f) return state.SkipWithError(f.error().message.c_str());
+    gpu += f->render_ms;
+  }
+  state.counters["render_ms"] = gpu / static_cast<double>(state.iterations());
+  state.counters["maxrss_before_MiB"] = before;
+  state.counters["maxrss_MiB"] = maxrss_mib();
+}
+BENCHMARK(BM_Memory4k)
+    ->ArgsProduct({{1, 4}, {0, 1}})
+    ->ArgNames({"samples", "fp16"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
 // The GPU encode pass (HDR10, default tone curve) over the frame still on the GPU,
 // including the packed 10-bit readback, compared with the frame's render time.
 void BM_EncodePass(benchmark::State& state) {
