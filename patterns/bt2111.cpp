@@ -2,7 +2,8 @@
 // television systems": the PQ and HLG narrow-range variants. Levels are the standard's
 // signal percentages; codes follow BT.2100 Table 9 (D = round((219 E' + 16) 2^(n-8))).
 // The BT.709 bars of the bottom row are 100 % BT.709 colours converted to BT.2020 and
-// placed at the standard's reference white: HLG 75 % (scene light 0.2650) and PQ 58 %.
+// placed at the standard's reference white: HLG 75 % (scene light 0.2650) and PQ 58 %,
+// converted with the BT.2087 matrix.
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -26,7 +27,9 @@ double bar_percent(Bt2111System s) { return s == Bt2111System::hlg ? 75.0 : 58.0
 // A BT.709 colour (linear, 1.0 = reference white) in the BT.2020 container at the
 // system's reference white level.
 Code3 bt709_bar(Bt2111System s, color::Vec3 rec709) {
-  const color::Vec3 c = color::rgb_to_rgb(color::kRec709, color::kRec2020) * rec709;
+  // BT.2111-2 converts with the BT.2087 matrix as published (4 decimals); the derived
+  // matrix moves the HLG green bar's G by one code (707 instead of the table's 706).
+  const color::Vec3 c = color::kBt2087Rec709ToRec2020 * rec709;
   auto code = [&](double v) {
     v = std::max(v, 0.0);
     if (s == Bt2111System::hlg) return narrow(transfer::hlg_oetf(v * transfer::hlg_inverse_oetf(0.75)));

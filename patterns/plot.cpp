@@ -250,12 +250,12 @@ Plot fresnel_plot() {
   p.x_min = 0, p.x_max = 1, p.y_min = 0, p.y_max = 1;
   for (int i = 0; i <= 10; ++i) p.x_ticks.push_back(i / 10.0), p.y_ticks.push_back(i / 10.0);
   const color::Vec3 luma = color::kRec709Luma;
+  std::size_t metal_index = 0;
   for (const auto& m : shading::f0_presets()) {
     if (m.kind != shading::PresetKind::metal) continue;
     const double f0[3] = {m.f0_air.x, m.f0_air.y, m.f0_air.z};
-    // The line colour is the metal's own F0 as sRGB (darkened to read on white).
-    Rgb8 col;
-    for (int c = 0; c < 3; ++c) col[c] = std::uint8_t(std::lround(200 * transfer::srgb_inverse_eotf(f0[c])));
+    // Most metals' F0 is near grey: a palette colour per metal keeps the lines apart.
+    const Rgb8 col = palette(metal_index++);
     Series schlick{std::string(m.name), col, {}};
     for (int i = 0; i <= 200; ++i) {
       const double s = i / 200.0, ct = std::sqrt(std::max(0.0, 1 - s * s));

@@ -2,6 +2,7 @@
 // over-range ramp, patterns, rendered built-in scenes), encodes them for the mode and
 // runs the check functions over them.
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include <unistd.h>

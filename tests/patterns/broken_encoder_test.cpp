@@ -3,6 +3,7 @@
 // made from a good frame, which the same check passes first.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "display/hdr_metadata.hpp"

@@ -1,6 +1,8 @@
 // BT.2111 colour bars against the standard's code tables.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "patterns/patterns.hpp"
 
 namespace hdrd::patterns {
@@ -23,6 +25,7 @@ const Row kTable[] = {
     {"100% red", {940, 64, 64}, {940, 64, 64}},
     {"100% blue", {64, 64, 940}, {64, 64, 940}},
     {"ref white", {572, 572, 572}, {721, 721, 721}},
+    {"ref grey", {572, 572, 572}, {721, 721, 721}},
     {"ref yellow", {572, 572, 64}, {721, 721, 64}},
     {"ref cyan", {64, 572, 572}, {64, 721, 721}},
     {"ref green", {64, 572, 64}, {64, 721, 64}},

@@ -24,7 +24,7 @@ void run(const SheetOptions& o) {
   set_progress_enabled(!o.common.quiet);
   std::vector<std::string> notes;
   PipelineOptions po = o.pipeline;
-  if (po.mode == "hdr10") po.mode = "sdr";  // the default here is an SDR preview
+  if (po.mode.empty() || po.mode == "hdr10") po.mode = "sdr";  // the default here is an SDR preview
   EncodeSettings base = build_settings(po, exposure::Mode::manual, &notes);
   if (base.target.mode != Mode::sdr && base.target.mode != Mode::sdr_bt1886)
     throw CliError("contact sheets are SDR previews: use --mode sdr or sdr-bt1886 (--peak sets the tone curves' display)");

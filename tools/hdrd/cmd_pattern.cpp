@@ -1,5 +1,7 @@
 // hdrd pattern NAME -o OUTBASE: standard HDR test patterns (docs/patterns.md), written as
 // the same dumps (PNG/EXR/raw + JSON sidecar) as `hdrd encode`.
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "encode/io.hpp"
@@ -50,7 +52,7 @@ void run(const PatternCmdOptions& o) {
   if (!frame) throw HdrdError(frame.error());
   if (o.name == "bt2111" && settings.target.range != Range::narrow)
     notes.push_back("bt2111 is defined in narrow range: written with --range narrow");
-  if (frame->settings["pattern"].contains("note")) notes.push_back(frame->settings["pattern"]["note"]);
+  if (frame->settings["pattern"].contains("note")) notes.push_back(frame->settings["pattern"]["note"].get<std::string>());
   auto dumps = io::write_dumps(*frame, o.outbase, formats);
   if (!dumps) throw HdrdError(dumps.error());
   progress("wrote pattern {} ({}x{}, {})", o.name, frame->width, frame->height, to_string(frame->target.mode));
