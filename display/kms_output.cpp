@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -86,10 +87,20 @@ bool ten_bit_or_more(std::uint32_t fourcc) { return fourcc != kDrmFormatXrgb8888
 
 }  // namespace
 
-Result<Connector> pick_connector(KmsDevice& dev, const std::string& name) {
+namespace {
+
+bool signals_hdr(KmsDevice& dev, const Connector& c) {
+  auto props = dev.properties(c.id, kObjectConnector);
+  return props && find_property(*props, "HDR_OUTPUT_METADATA") && find_property(*props, "Colorspace");
+}
+
+}  // namespace
+
+Result<Connector> pick_connector(KmsDevice& dev, const std::string& name, bool prefer_hdr) {
   auto res = dev.resources();
   if (!res) return res.error();
   std::vector<std::string> seen;
+  std::optional<Connector> first;
   for (std::uint32_t id : res->connectors) {
     auto c = dev.connector(id);
     if (!c) return c.error();
@@ -98,12 +109,15 @@ Result<Connector> pick_connector(KmsDevice& dev, const std::string& name) {
       seen.push_back(c->name);
       continue;
     }
-    if (c->status == ConnectionStatus::connected && !c->modes.empty()) return std::move(*c);
+    const bool usable = c->status == ConnectionStatus::connected && !c->modes.empty();
+    if (usable && (!name.empty() || !prefer_hdr || signals_hdr(dev, *c))) return std::move(*c);
+    if (usable && !first) first = *c;
     if (!name.empty())
       return make_error("kms.no_display", fmt::format("no display attached to {} on {} ({}, {} modes)", name, dev.path(),
                                                       to_string(c->status), c->modes.size()), "connector");
-    seen.push_back(fmt::format("{} {}", c->name, to_string(c->status)));
+    if (!usable) seen.push_back(fmt::format("{} {}", c->name, to_string(c->status)));
   }
+  if (first) return std::move(*first);  // no HDR-capable one: the first connected display
   if (!name.empty())
     return make_error("kms.no_connector", fmt::format("{} has no connector {} (it has: {})", dev.path(), name,
                                                       seen.empty() ? "none" : fmt::format("{}", fmt::join(seen, ", "))),
@@ -197,7 +211,8 @@ Result<PresentResult> KmsOutput::show(const EncodedFrame& input, const PresentOp
   out.fourcc = f.drm_fourcc;
   out.signal = f.target.mode;
 
-  auto conn = pick_connector(device_, opt.connector);
+  const bool hdr = f.target.mode == Mode::hdr10 || f.target.mode == Mode::hlg;
+  auto conn = pick_connector(device_, opt.connector, hdr);
   if (!conn) return conn.error();
   out.connector = conn->name;
   auto res = device_.resources();

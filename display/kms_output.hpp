@@ -17,6 +17,7 @@ namespace hdrd::display {
 
 struct PresentOptions {
   std::string connector;              // "HDMI-A-1"; empty = the first connected connector
+                                      // (for HDR frames: the first one that can signal HDR)
   bool test_only = false;             // stop after the TEST_ONLY commit
   ScrgbPolicy scrgb = ScrgbPolicy::convert;
   // HDR signals need HDR_OUTPUT_METADATA and Colorspace on the connector, or the display
@@ -38,9 +39,10 @@ struct PresentResult {
   std::vector<std::string> notes;
 };
 
-// The connector to use: by name, or the first connected one. Errors say clearly when no
-// display is attached.
-Result<kms::Connector> pick_connector(kms::KmsDevice& device, const std::string& name);
+// The connector to use: by name, or the first connected one (with `prefer_hdr`, the first
+// connected one that has HDR_OUTPUT_METADATA and Colorspace, if any). Errors say clearly
+// when no display is attached.
+Result<kms::Connector> pick_connector(kms::KmsDevice& device, const std::string& name, bool prefer_hdr = false);
 
 // Owns what a shown frame needs (framebuffer, dumb buffer, blobs) until destroyed or the
 // next show(); the kernel turns the plane off when the device is closed.

@@ -78,8 +78,9 @@ Result<void> parse_match(const json& m, ProfileOverride& o) {
     else if (k == "product_code" && v.is_number_integer() && v.get<std::int64_t>() >= 0 && v.get<std::int64_t>() <= 0xffff)
       o.match_product_code = static_cast<std::uint16_t>(v.get<std::int64_t>());
     else if (k == "product_code" && v.is_string()) {
+      const std::string text = v.get<std::string>();  // strtol's end pointer points into it
       char* end = nullptr;
-      const long code = std::strtol(v.get<std::string>().c_str(), &end, 0);
+      const long code = std::strtol(text.c_str(), &end, 0);
       if (!end || *end || code < 0 || code > 0xffff) return bad(o.source, "match.product_code", "product_code must be 0..65535");
       o.match_product_code = static_cast<std::uint16_t>(code);
     } else {

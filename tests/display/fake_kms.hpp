@@ -103,6 +103,15 @@ class FakeKmsDevice : public KmsDevice {
   std::map<std::uint32_t, Fb> framebuffers;
   int live_dumbs = 0;
 
+  // Plugs a display into DP-1 too, with the HDR properties (HDMI keeps whatever it has).
+  void connect_dp_with_hdr() {
+    connectors_[1].status = ConnectionStatus::connected;
+    connectors_[1].modes = {make_mode(2560, 1440, 241500, 2720, 1481, true)};
+    add_prop(kDp, "HDR_OUTPUT_METADATA", PropertyKind::blob);
+    add_prop(kDp, "Colorspace", PropertyKind::enumeration,
+             {{"Default", DRM_MODE_COLORIMETRY_DEFAULT}, {"BT2020_RGB", DRM_MODE_COLORIMETRY_BT2020_RGB}});
+  }
+
   void set_plane_formats(std::uint32_t plane, std::vector<std::uint32_t> formats) {
     for (auto& p : planes_)
       if (p.id == plane) p.formats = std::move(formats);

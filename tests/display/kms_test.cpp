@@ -205,6 +205,20 @@ TEST(KmsOutput, HdrNeedsHdrPropertiesUnlessToldOtherwise) {
   EXPECT_FALSE(ok->notes.empty());
 }
 
+TEST(KmsOutput, HdrFramesGoToTheFirstConnectorThatCanSignalHdr) {
+  FakeKmsDevice dev(/*hdr_properties=*/false);  // HDMI-A-1: connected, no HDR properties
+  dev.connect_dp_with_hdr();                    // DP-1: connected, HDR properties
+  auto hdr = KmsOutput(dev).show(hdr10_frame(64, 32));
+  ASSERT_TRUE(hdr.ok()) << hdr.error().message;
+  EXPECT_EQ(hdr->connector, "DP-1");
+  auto sdr = KmsOutput(dev).show(sdr_frame(64, 32));
+  ASSERT_TRUE(sdr.ok());
+  EXPECT_EQ(sdr->connector, "HDMI-A-1");
+  PresentOptions named;
+  named.connector = "HDMI-A-1";  // a named connector is used as asked, and refused for HDR
+  EXPECT_EQ(KmsOutput(dev).show(hdr10_frame(64, 32), named).error().code, "kms.no_hdr");
+}
+
 TEST(KmsOutput, SdrClearsHdrStateAndUsesDefaultColorspace) {
   FakeKmsDevice dev;
   KmsOutput out(dev);
