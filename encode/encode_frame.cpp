@@ -303,31 +303,58 @@ bool ui_touches_row(const PreparedUi& ui, int y) {
   return ui.active() && y + 1 > ui.y0 - ui.scale && y < ui.y0 + (ui.h + 1) * ui.scale;
 }
 
+// The fused kernel over pixels [x0, x0 + n) of row y; its tail and out-of-gamut pixels
+// take the exact path.
+void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& row, std::vector<int>& fallback,
+               ContentLightAccumulator& cll) {
+  if (n <= 0) return;
+  kernels::FusedRow fr = *job.fused;
+  const std::size_t base = static_cast<std::size_t>(y) * job.width + x0;
+  if (job.in->half) fr.half_in = job.in->half->rgba.data() + base * 4;
+  else fr.float_in = job.in->image->rgba.data() + base * 4;
+  fr.n = n;
+  const std::size_t bpp = job.frame->drm_fourcc == kDrmFormatAbgr16161616f ? 8 : 4;
+  fr.out = job.frame->data.data() + static_cast<std::size_t>(y) * job.frame->stride_bytes + x0 * bpp;
+  fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
+  fr.fallback = fallback.data();
+  kernels::fused_row(fr);
+  cll.max_nits = std::max(cll.max_nits, fr.max_nits);
+  cll.sum_nits += fr.sum_nits;
+  if (fr.done < n) {
+    run_staged(job, y, x0 + fr.done, n - fr.done, row.data());
+    stage_encode(job, y, x0 + fr.done, n - fr.done, row.data(), cll);
+  }
+  for (int i = 0; i < fr.fallback_count; ++i) {
+    run_staged(job, y, x0 + fallback[i], 1, row.data());
+    stage_encode(job, y, x0 + fallback[i], 1, row.data(), cll);
+  }
+}
+
+// The columns the UI can touch: [begin, end).
+std::pair<int, int> ui_columns(const PreparedUi& ui, int width) {
+  const int begin = std::clamp(static_cast<int>(std::floor(ui.x0 - ui.scale)), 0, width);
+  const int end = std::clamp(static_cast<int>(std::ceil(ui.x0 + (ui.w + 1) * ui.scale)), begin, width);
+  return {begin, end};
+}
+
 void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll) {
   const int w = job.width;
   std::vector<float> row(static_cast<std::size_t>(w) * 4);
   std::vector<int> fallback(static_cast<std::size_t>(w));
   for (int y = y_begin; y < y_end; ++y) {
     if (job.fused && !ui_touches_row(*job.ui, y)) {
-      kernels::FusedRow fr = *job.fused;
-      const std::size_t base = static_cast<std::size_t>(y) * w;
-      if (job.in->half) fr.half_in = job.in->half->rgba.data() + base * 4;
-      else fr.float_in = job.in->image->rgba.data() + base * 4;
-      fr.n = w;
-      fr.out = job.frame->data.data() + static_cast<std::size_t>(y) * job.frame->stride_bytes;
-      fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
-      fr.fallback = fallback.data();
-      kernels::fused_row(fr);
-      cll.max_nits = std::max(cll.max_nits, fr.max_nits);
-      cll.sum_nits += fr.sum_nits;
-      // The tail, and pixels outside the display gamut, take the exact path.
-      if (fr.done < w) {
-        run_staged(job, y, fr.done, w - fr.done, row.data());
-        stage_encode(job, y, fr.done, w - fr.done, row.data(), cll);
-      }
-      for (int i = 0; i < fr.fallback_count; ++i) {
-        run_staged(job, y, fallback[i], 1, row.data());
-        stage_encode(job, y, fallback[i], 1, row.data(), cll);
+      run_fused(job, y, 0, w, row, fallback, cll);
+      continue;
+    }
+    if (job.fused) {
+      // Only the columns under the UI need linear light before encoding.
+      const auto [x0, x1] = ui_columns(*job.ui, w);
+      run_fused(job, y, 0, x0, row, fallback, cll);
+      run_fused(job, y, x1, w - x1, row, fallback, cll);
+      if (x1 > x0) {
+        run_staged(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4);
+        composite_ui_row(*job.ui, y, w, row.data());
+        stage_encode(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4, cll);
       }
       continue;
     }

@@ -332,3 +332,42 @@ TEST(Encode, MeasuredContentLightMatchesTheEncoder) {
   }
 }
 }  // namespace
+
+namespace {
+// UI rows: the fused kernel outside the overlay's columns, the staged path under it.
+TEST(Encode, UiRowsMatchTheStagedPath) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0, 4);
+  Image img(160, 40);
+  for (auto& v : img.rgba) v = u(rng);
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 17;
+  overlay->height = 9;
+  for (int i = 0; i < 17 * 9; ++i) {
+    const float a = (i % 5) / 4.0f;
+    overlay->rgba.insert(overlay->rgba.end(), {0.9f, 0.5f, 0.2f, a});
+  }
+  for (Mode m : {Mode::hdr10, Mode::sdr}) {
+    auto fast = settings(m, "pq-shoulder");
+    fast.ui.overlay = overlay;
+    fast.ui.x = 61;
+    fast.ui.y = 13;
+    fast.ui.scale = 1.5;
+    fast.ui.dim = 0.3;
+    auto staged = fast;
+    staged.keep_display_nits = true;
+    const auto a = encode(img, fast), b = encode(img, staged);
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const auto ca = codes_at(a, x, y), cb = codes_at(b, x, y);
+        for (int c = 0; c < 3; ++c) ASSERT_LE(std::abs(ca[c] - cb[c]), 1) << x << "," << y;
+      }
+    // The overlay is there: a pixel under opaque UI differs from the same frame without UI.
+    auto plain = fast;
+    plain.ui.overlay.reset();
+    const auto p = encode(img, plain);
+    EXPECT_NE(codes_at(a, 70, 20), codes_at(p, 70, 20));
+    EXPECT_EQ(codes_at(a, 5, 20), codes_at(p, 5, 20));
+  }
+}
+}  // namespace
