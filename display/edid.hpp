@@ -223,6 +223,10 @@ struct EdidInfo {
   };
   std::vector<TextDescriptor> text_descriptors;  // in descriptor order
   std::vector<DetailedTiming> detailed_timings;  // base block DTDs, preferred first
+  // DisplayID type I (1.x) / type VII (2.0) detailed timings, and the index of the one
+  // flagged preferred (DisplayID-only panels have no base block DTD).
+  std::vector<DetailedTiming> displayid_timings;
+  std::optional<std::size_t> displayid_preferred;
 
   int extension_count = 0;            // as declared by byte 0x7E (or HF-EEODB)
   std::uint8_t base_checksum = 0;
@@ -244,8 +248,12 @@ struct EdidInfo {
 
   std::vector<std::string> warnings;
 
+  // The base block's first DTD (E-EDID 1.4: the preferred timing), else DisplayID's
+  // preferred (or first) detailed timing.
   const DetailedTiming* preferred_timing() const {
-    return detailed_timings.empty() ? nullptr : &detailed_timings.front();
+    if (!detailed_timings.empty()) return &detailed_timings.front();
+    if (displayid_timings.empty()) return nullptr;
+    return &displayid_timings[displayid_preferred.value_or(0)];
   }
 };
 

@@ -164,6 +164,28 @@ void parse_product_id(Bytes p, bool v2, DisplayIdDataBlock& db, const std::strin
   if (!name.empty()) db.product_name = std::move(name);
 }
 
+// DisplayID 1.3 §4.4.1 type I and 2.0 §4.3.1 type VII detailed timings: 20-byte
+// descriptors, every field stored minus one; the clock in 10 kHz (type I) or 1 kHz (VII).
+void parse_detailed_timings(Bytes p, bool v2, const std::string& where, EdidInfo& info) {
+  if (p.size() % 20) warn(info, "{}: detailed timings block length {} is not a multiple of 20", where, p.size());
+  for (std::size_t o = 0; o + 20 <= p.size(); o += 20) {
+    DetailedTiming t;
+    const std::uint32_t clock = (at(p, o) | (at(p, o + 1) << 8) | (std::uint32_t(at(p, o + 2)) << 16)) + 1u;
+    t.pixel_clock_khz = v2 ? clock : clock * 10u;
+    t.interlaced = at(p, o + 3) & 0x10;
+    t.h_active = le16(p, o + 4) + 1;
+    t.h_blank = le16(p, o + 6) + 1;
+    t.h_front = (le16(p, o + 8) & 0x7fff) + 1;
+    t.h_sync = le16(p, o + 10) + 1;
+    t.v_active = le16(p, o + 12) + 1;
+    t.v_blank = le16(p, o + 14) + 1;
+    t.v_front = (le16(p, o + 16) & 0x7fff) + 1;
+    t.v_sync = le16(p, o + 18) + 1;
+    if ((at(p, o + 3) & 0x80) && !info.displayid_preferred) info.displayid_preferred = info.displayid_timings.size();
+    info.displayid_timings.push_back(t);
+  }
+}
+
 DisplayIdDataBlock parse_data_block(std::uint8_t tag, std::uint8_t rev, Bytes p, bool v2, int block_index,
                                     const std::string& where, EdidInfo& info) {
   DisplayIdDataBlock db;
@@ -180,6 +202,7 @@ DisplayIdDataBlock parse_data_block(std::uint8_t tag, std::uint8_t rev, Bytes p,
   if (v2 && tag == 0x21) parse_parameters_v2(p, rev, db, block_index, where, info);
   else if (v2 && tag == 0x26) parse_interface_features(p, db, block_index, where, info);
   else if ((v2 && tag == 0x20) || (!v2 && tag == 0x00)) parse_product_id(p, v2, db, where, info);
+  else if ((v2 && tag == 0x22) || (!v2 && tag == 0x03)) parse_detailed_timings(p, v2, where, info);
   else if (tag == 0x81)
     db.cta = detail::parse_cta_data_blocks(p, block_index, where + ", CTA-861 DisplayID Data Block", info);
   return db;

@@ -285,6 +285,26 @@ TEST_P(EdidFixture, TextCoversEdidDecodesHdrLines) {
     }
 }
 
+// A DisplayID-only panel: its preferred timing is a DisplayID 2.0 type VII descriptor.
+// edid-decode prints "DTD:  3120x2080  120.000000 Hz ... 900.864000 MHz ... preferred".
+TEST(EdidDisplayIdTimings, PreferredTimingOfADisplayIdOnlyPanel) {
+  auto path = hdrd::testing::fixture("fixtures/edid/EDO4179_82397317A590.bin");
+  if (!path) GTEST_SKIP() << "shared fixture missing";
+  auto e = parse_edid(read_bytes(*path));
+  ASSERT_TRUE(e.ok());
+  EXPECT_TRUE(e->detailed_timings.empty());
+  ASSERT_EQ(e->displayid_timings.size(), 2u);
+  const DetailedTiming* t = e->preferred_timing();
+  ASSERT_NE(t, nullptr);
+  EXPECT_EQ(t->h_active, 3120);
+  EXPECT_EQ(t->v_active, 2080);
+  EXPECT_EQ(t->pixel_clock_khz, 900864u);
+  EXPECT_EQ(t->h_front, 212);
+  EXPECT_EQ(t->v_front, 122);
+  EXPECT_NEAR(t->refresh_hz(), 120.0, 1e-9);
+  EXPECT_NEAR(e->displayid_timings[1].refresh_hz(), 60.0, 1e-9);
+}
+
 INSTANTIATE_TEST_SUITE_P(Fixtures, EdidFixture, ::testing::ValuesIn(manifest_files()),
                          [](const ::testing::TestParamInfo<std::string>& i) {
                            std::string n = i.param.substr(0, i.param.find('.'));
