@@ -155,6 +155,108 @@ Reply encode_and_reply(const SceneInput& in, const Request& req, OutputKind outp
   return std::move(*reply);
 }
 
+#ifdef HDRD_HAVE_RENDERER
+// The renderer's request for a validated daemon request.
+shading::RenderRequest to_render_request(const Request& q, const Config& cfg) {
+  shading::RenderRequest rq;
+  switch (q.scene.kind) {
+    case SceneSpec::Kind::builtin: rq.scene = q.scene.name; break;
+    case SceneSpec::Kind::inline_json: rq.scene_json = q.scene.inline_scene; break;
+    case SceneSpec::Kind::scene_file:
+    case SceneSpec::Kind::gltf: rq.scene = q.scene.path.string(); break;
+  }
+  rq.width = q.width;
+  rq.height = q.height;
+  rq.samples = std::min(q.samples, shading::kMaxSamples);
+  const auto vec = [](const std::array<double, 3>& v) { return shading::Vec3{v[0], v[1], v[2]}; };
+  if (q.camera.position || q.camera.target || q.camera.fov_y_deg) {
+    shading::CameraOverride cam;
+    if (q.camera.position) cam.position = vec(*q.camera.position);
+    if (q.camera.target) cam.target = vec(*q.camera.target);
+    cam.yfov_deg = q.camera.fov_y_deg;
+    rq.camera = cam;
+  }
+  // Files named by a request were resolved inside the asset root; JSON scenes may not
+  // reach further files (their paths are not checked against the root).
+  rq.load.allow_files = false;
+  rq.load.base_dir = cfg.paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg.paths.asset_root;
+  rq.load.limits.max_lights = cfg.limits.max_lights;
+  return rq;
+}
+
+// Render stage (on a render worker, with its renderer): the scene-referred frame.
+Result<void> render_stage(RenderJobState& st, RenderResource* res, Metrics& metrics) {
+  auto* rr = dynamic_cast<RendererResource*>(res);
+  if (!rr) return make_error("renderer.unavailable", "renderer not available on this worker");
+  const Request& q = st.request;
+  const shading::RenderRequest rq = to_render_request(q, *st.config);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = rr->renderer->render(rq);
+  if (!r) {
+    Error e = r.error();
+    // Fields inside an inline scene are reported relative to the request.
+    if (q.scene.kind == SceneSpec::Kind::inline_json && !e.field.empty() && e.field.rfind("scene", 0) != 0)
+      e.field = "scene." + e.field;
+    return e;
+  }
+  st.rendered = std::move(*r);
+  st.render_s = seconds_since(t0);
+  metrics.stage_time("render", st.render_s);
+  return {};
+}
+
+// Encode stage (on the encode pool): exposure, tone curve, encoding, the reply.
+Reply render_finish(RenderJobState& st, Metrics& metrics) {
+  const auto& rd = st.rendered;
+  SceneInput in;
+  in.image = &rd.scene_nits;
+  in.to_working = color::to_working(color::Space::rec709);
+  in.units = InputUnits::absolute;
+  in.white_luminance_nits = 1.0;
+  if (rd.dominant_illuminance_lux > 0) in.illuminance_lux = rd.dominant_illuminance_lux;
+  // Renders are absolute light: meter the lighting (RTR4: incident metering) when the
+  // scene has a light, else the log-average of the frame.
+  const auto default_exposure =
+      rd.dominant_illuminance_lux > 0 ? exposure::Mode::light : exposure::Mode::log_average;
+  json extra = {{"render",
+                 {{"scene", rd.scene_name}, {"backend", rd.backend}, {"gl_renderer", rd.gl_renderer},
+                  {"samples", rd.samples}, {"render_ms", rd.render_ms},
+                  {"dominant_illuminance_lux", rd.dominant_illuminance_lux}}}};
+  Reply reply = encode_and_reply(in, st.request, st.output, st.dump_name, *st.config, default_exposure,
+                                 rd.warnings, extra, metrics);
+  reply.headers.emplace_back("X-Hdrd-Render-Ms", fmt::format("{:.1f}", st.render_s * 1e3));
+  reply.headers.emplace_back("X-Hdrd-Scene", rd.scene_name);
+  reply.headers.emplace_back("X-Hdrd-Backend", rd.backend);
+  return reply;
+}
+
+#endif
+
+// /v1/encode's only stage (on the encode pool): decode the upload, encode, reply.
+Reply encode_finish(EncodeJobState& st, const JobControl& control, Metrics& metrics) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto exr = io::read_exr_memory(
+      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(st.exr.data()), st.exr.size()));
+  if (!exr) return Reply::error(exr.error());
+  metrics.stage_time("decode", seconds_since(t0));
+  if (control.should_stop()) return Reply::error(make_error("request.cancelled", "cancelled"));
+  SceneInput in;
+  in.image = &exr->image;
+  in.to_working = exr->to_working();
+  // REFERENCE.md §1.1: relative unless the file has whiteLuminance or the request says.
+  const auto& q = st.request;
+  in.units = q.input.empty() ? (exr->white_luminance ? InputUnits::absolute : InputUnits::relative)
+                             : *parse_input_units(q.input);
+  in.white_luminance_nits = exr->white_luminance.value_or(1.0);
+  std::vector<std::string> warnings = exr->warnings;
+  if (in.units == InputUnits::absolute && !exr->white_luminance)
+    warnings.push_back("input absolute without whiteLuminance: values are taken as cd/m2");
+  json extra = {{"input", {{"units", to_string(in.units)}, {"white_luminance_nits", in.white_luminance_nits},
+                           {"channels", exr->channels}, {"bytes", st.exr.size()}}}};
+  return encode_and_reply(in, q, st.output, st.dump_name, *st.config, exposure::Mode::manual, warnings, extra,
+                          metrics);
+}
+
 }  // namespace
 
 const Service::Route* Service::find_route(const HttpRequest& r, std::string* allow) const {
@@ -270,8 +372,11 @@ void Service::submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Re
     return;
   }
   Scheduler* sched = scheduler_.get();
-  responder->on_abort([sched, metrics, w = *waiter](const Error& why) {
-    if (!sched->cancel(w)) return false;
+  // A weak reference: the waiter's delivery holds the responder, so a strong one here
+  // would make a cycle that outlives the request.
+  responder->on_abort([sched, metrics, weak = std::weak_ptr<Waiter>(*waiter)](const Error& why) {
+    auto w = weak.lock();
+    if (!w || !sched->cancel(w)) return false;
     if (why.code == "request.timeout") ++metrics->timed_out;
     else ++metrics->cancelled;
     return true;
@@ -445,70 +550,8 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
   spec.deadline = http.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
   if (!st->request.dump) spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output));
   Metrics* metrics = &metrics_;
-  spec.render = [st, metrics](RenderResource* res, const JobControl&) -> Result<void> {
-    auto* rr = dynamic_cast<RendererResource*>(res);
-    if (!rr) return make_error("renderer.unavailable", "renderer not available on this worker");
-    const Request& q = st->request;
-    shading::RenderRequest rq;
-    switch (q.scene.kind) {
-      case SceneSpec::Kind::builtin: rq.scene = q.scene.name; break;
-      case SceneSpec::Kind::inline_json: rq.scene_json = q.scene.inline_scene; break;
-      case SceneSpec::Kind::scene_file:
-      case SceneSpec::Kind::gltf: rq.scene = q.scene.path.string(); break;
-    }
-    rq.width = q.width;
-    rq.height = q.height;
-    rq.samples = std::min(q.samples, shading::kMaxSamples);
-    if (q.camera.position || q.camera.target || q.camera.fov_y_deg) {
-      shading::CameraOverride cam;
-      if (q.camera.position) cam.position = shading::Vec3{(*q.camera.position)[0], (*q.camera.position)[1], (*q.camera.position)[2]};
-      if (q.camera.target) cam.target = shading::Vec3{(*q.camera.target)[0], (*q.camera.target)[1], (*q.camera.target)[2]};
-      cam.yfov_deg = q.camera.fov_y_deg;
-      rq.camera = cam;
-    }
-    // Files named by a request were resolved inside the asset root; JSON scenes may not
-    // reach further files (their paths are not checked against the root).
-    rq.load.allow_files = false;
-    rq.load.base_dir = st->config->paths.asset_root.empty() ? std::filesystem::path("/nonexistent")
-                                                           : st->config->paths.asset_root;
-    rq.load.limits.max_lights = st->config->limits.max_lights;
-    const auto t0 = std::chrono::steady_clock::now();
-    auto r = rr->renderer->render(rq);
-    if (!r) {
-      Error e = r.error();
-      // Fields inside an inline scene are reported relative to the request.
-      if (q.scene.kind == SceneSpec::Kind::inline_json && !e.field.empty() && e.field.rfind("scene", 0) != 0)
-        e.field = "scene." + e.field;
-      return e;
-    }
-    st->rendered = std::move(*r);
-    st->render_s = seconds_since(t0);
-    metrics->stage_time("render", st->render_s);
-    return {};
-  };
-  spec.finish = [st, metrics](const JobControl&) -> Reply {
-    const auto& rd = st->rendered;
-    SceneInput in;
-    in.image = &rd.scene_nits;
-    in.to_working = color::to_working(color::Space::rec709);
-    in.units = InputUnits::absolute;
-    in.white_luminance_nits = 1.0;
-    if (rd.dominant_illuminance_lux > 0) in.illuminance_lux = rd.dominant_illuminance_lux;
-    // Renders are absolute light: meter the lighting (RTR4: incident metering) when the
-    // scene has a light, else the log-average of the frame.
-    const auto default_exposure =
-        rd.dominant_illuminance_lux > 0 ? exposure::Mode::light : exposure::Mode::log_average;
-    json extra = {{"render",
-                   {{"scene", rd.scene_name}, {"backend", rd.backend}, {"gl_renderer", rd.gl_renderer},
-                    {"samples", rd.samples}, {"render_ms", rd.render_ms},
-                    {"dominant_illuminance_lux", rd.dominant_illuminance_lux}}}};
-    Reply reply = encode_and_reply(in, st->request, st->output, st->dump_name, *st->config, default_exposure,
-                                   rd.warnings, extra, *metrics);
-    reply.headers.emplace_back("X-Hdrd-Render-Ms", fmt::format("{:.1f}", st->render_s * 1e3));
-    reply.headers.emplace_back("X-Hdrd-Scene", rd.scene_name);
-    reply.headers.emplace_back("X-Hdrd-Backend", rd.backend);
-    return reply;
-  };
+  spec.render = [st, metrics](RenderResource* res, const JobControl&) { return render_stage(*st, res, *metrics); };
+  spec.finish = [st, metrics](const JobControl&) { return render_finish(*st, *metrics); };
   submit(std::move(spec), true, responder);
 #endif
 }
@@ -577,29 +620,7 @@ void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responde
     spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output)) +
                fmt::format("|exr:{}:{:016x}", st->exr.size(), fnv1a(st->exr));
   Metrics* metrics = &metrics_;
-  spec.finish = [st, metrics](const JobControl& control) -> Reply {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto exr = io::read_exr_memory(
-        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(st->exr.data()), st->exr.size()));
-    if (!exr) return Reply::error(exr.error());
-    metrics->stage_time("decode", seconds_since(t0));
-    if (control.should_stop()) return Reply::error(make_error("request.cancelled", "cancelled"));
-    SceneInput in;
-    in.image = &exr->image;
-    in.to_working = exr->to_working();
-    // REFERENCE.md §1.1: relative unless the file has whiteLuminance or the request says.
-    const auto& q = st->request;
-    in.units = q.input.empty() ? (exr->white_luminance ? InputUnits::absolute : InputUnits::relative)
-                               : *parse_input_units(q.input);
-    in.white_luminance_nits = exr->white_luminance.value_or(1.0);
-    std::vector<std::string> warnings = exr->warnings;
-    if (in.units == InputUnits::absolute && !exr->white_luminance)
-      warnings.push_back("input absolute without whiteLuminance: values are taken as cd/m2");
-    json extra = {{"input", {{"units", to_string(in.units)}, {"white_luminance_nits", in.white_luminance_nits},
-                             {"channels", exr->channels}, {"bytes", st->exr.size()}}}};
-    return encode_and_reply(in, q, st->output, st->dump_name, *st->config, exposure::Mode::manual, warnings, extra,
-                            *metrics);
-  };
+  spec.finish = [st, metrics](const JobControl& control) { return encode_finish(*st, control, *metrics); };
   submit(std::move(spec), false, responder);
 }
 

@@ -100,9 +100,11 @@ void free_body(void* cls) { delete static_cast<std::shared_ptr<const std::string
 // ---- Responder ----------------------------------------------------------------------
 
 void Responder::reply(Reply r) {
+  std::function<bool(const Error&)> abort_fn;  // released outside the lock
   std::lock_guard lock(mu_);
   if (reply_) return;
   reply_ = std::move(r);
+  abort_fn.swap(on_abort_);
   if (state_ == State::suspended) {
     state_ = State::done;
     resumed_ = true;
@@ -247,50 +249,101 @@ int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
   return ok == MHD_YES;
 }
 
+// First call for a request: headers only. Decides the body limit (or answers at once).
+int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method,
+                              RequestContext& ctx) {
+  ++open_requests_;
+  auto& req = ctx.req;
+  req.id = next_id_++;
+  req.method = method ? method : "";
+  req.path = url ? url : "";
+  req.tcp = inst.tcp;
+  req.started = std::chrono::steady_clock::now();
+  MHD_get_connection_values(c, MHD_HEADER_KIND, &collect_header, &req.headers);
+  MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, &collect_query, &req.query);
+  if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT))
+    if (ci->socket_context) req.peer = static_cast<ConnectionInfo*>(ci->socket_context)->peer;
+  auto pre = handler_.begin(req);
+  if (auto* r = std::get_if<Reply>(&pre)) return queue(c, ctx, *r);
+  ctx.limit = std::get<std::size_t>(pre);
+  if (const auto* cl = req.header("content-length")) {
+    char* end = nullptr;
+    const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
+    if (end && *end == '\0' && n > ctx.limit) {
+      // A client that waits for "100 Continue", or one about to send far too much, is
+      // answered at once (and the connection closed). A modestly oversized body is read
+      // and dropped first, so that simple clients which send before they read still
+      // see the 413 instead of a broken pipe.
+      if (req.header("expect") || n > ctx.limit + kDrainLimitBytes) return queue(c, ctx, too_large_reply(ctx.limit));
+      ctx.too_large = true;
+    }
+  }
+  return MHD_YES;
+}
+
+// Body bytes as they stream in, kept up to the limit; beyond it they are dropped.
+void HttpServer::collect_body(RequestContext& ctx, const char* data, std::size_t size) {
+  if (ctx.too_large || ctx.queued) return;
+  if (ctx.req.body.size() + size > ctx.limit) {
+    ctx.too_large = true;
+    std::string().swap(ctx.req.body);
+  } else {
+    ctx.req.body.append(data, size);
+  }
+}
+
+// multipart/form-data bodies are split into parts by MHD's post processor.
+std::optional<Reply> HttpServer::split_multipart(MHD_Connection* c, RequestContext& ctx) {
+  auto& req = ctx.req;
+  const auto* ct = req.header("content-type");
+  if (!ct || ct->rfind("multipart/form-data", 0) != 0) return std::nullopt;
+  req.multipart = true;
+  PostState st{&req.parts, 0, ctx.limit};
+  MHD_PostProcessor* pp = MHD_create_post_processor(c, 64 * 1024, &collect_part, &st);
+  bool ok = pp != nullptr;
+  if (pp) {
+    ok = MHD_post_process(pp, req.body.data(), req.body.size()) == MHD_YES;
+    ok = (MHD_destroy_post_processor(pp) == MHD_YES) && ok;
+  }
+  std::string().swap(req.body);
+  if (st.overflow) return Reply::error(make_error("request.limit", "multipart body: too many or too large parts"));
+  if (!ok) return Reply::error(make_error("request.syntax", "malformed multipart/form-data body"));
+  return std::nullopt;
+}
+
+// The complete request goes to the handler; a reply that is not there when it returns
+// arrives later, so the connection is suspended until then.
+int HttpServer::dispatch(MHD_Connection* c, RequestContext& ctx) {
+  auto responder = std::make_shared<Responder>();
+  responder->connection_ = c;
+  if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD)) responder->fd_ = ci->connect_fd;
+  ctx.responder = responder;
+  handler_.handle(ctx.req, responder);
+  {
+    std::unique_lock lock(responder->mu_);
+    if (responder->reply_) {
+      responder->state_ = Responder::State::done;
+      Reply r = *responder->reply_;
+      lock.unlock();
+      return queue(c, ctx, r);
+    }
+    responder->state_ = Responder::State::suspended;
+    MHD_suspend_connection(c);
+  }
+  watch(responder);
+  return MHD_YES;
+}
+
 int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method,
                           const char* upload_data, std::size_t* upload_data_size, void** con_cls) {
   auto* ctx = static_cast<RequestContext*>(*con_cls);
-  if (!ctx) {  // first call: headers only
+  if (!ctx) {
     ctx = new RequestContext;
     *con_cls = ctx;
-    ++open_requests_;
-    auto& req = ctx->req;
-    req.id = next_id_++;
-    req.method = method ? method : "";
-    req.path = url ? url : "";
-    req.tcp = inst.tcp;
-    req.started = std::chrono::steady_clock::now();
-    MHD_get_connection_values(c, MHD_HEADER_KIND, &collect_header, &req.headers);
-    MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, &collect_query, &req.query);
-    if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT))
-      if (ci->socket_context) req.peer = static_cast<ConnectionInfo*>(ci->socket_context)->peer;
-    auto pre = handler_.begin(req);
-    if (auto* r = std::get_if<Reply>(&pre)) return queue(c, *ctx, *r);
-    ctx->limit = std::get<std::size_t>(pre);
-    if (const auto* cl = req.header("content-length")) {
-      char* end = nullptr;
-      const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
-      if (end && *end == '\0' && n > ctx->limit) {
-        // A client that waits for "100 Continue", or one about to send far too much, is
-        // answered at once (and the connection closed). A modestly oversized body is read
-        // and dropped first, so that simple clients which send before they read still
-        // see the 413 instead of a broken pipe.
-        const std::string* expect = req.header("expect");
-        if (expect || n > ctx->limit + kDrainLimitBytes) return queue(c, *ctx, too_large_reply(ctx->limit));
-        ctx->too_large = true;
-      }
-    }
-    return MHD_YES;
+    return begin_request(inst, c, url, method, *ctx);
   }
-  if (*upload_data_size > 0) {  // body bytes as they stream in
-    if (!ctx->too_large && !ctx->queued) {
-      if (ctx->req.body.size() + *upload_data_size > ctx->limit) {
-        ctx->too_large = true;  // keep reading (and dropping) so the 413 can be sent
-        std::string().swap(ctx->req.body);
-      } else {
-        ctx->req.body.append(upload_data, *upload_data_size);
-      }
-    }
+  if (*upload_data_size > 0) {
+    collect_body(*ctx, upload_data, *upload_data_size);
     *upload_data_size = 0;
     return MHD_YES;
   }
@@ -304,40 +357,8 @@ int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, co
     return queue(c, *ctx, r ? *r : Reply::error(make_error("internal", "resumed without a reply")));
   }
   if (ctx->too_large) return queue(c, *ctx, too_large_reply(ctx->limit));
-
-  auto& req = ctx->req;
-  if (const auto* ct = req.header("content-type"); ct && ct->rfind("multipart/form-data", 0) == 0) {
-    req.multipart = true;
-    PostState st{&req.parts, 0, ctx->limit};
-    MHD_PostProcessor* pp = MHD_create_post_processor(c, 64 * 1024, &collect_part, &st);
-    bool ok = pp != nullptr;
-    if (pp) {
-      ok = MHD_post_process(pp, req.body.data(), req.body.size()) == MHD_YES;
-      ok = (MHD_destroy_post_processor(pp) == MHD_YES) && ok;
-    }
-    std::string().swap(req.body);
-    if (st.overflow) return queue(c, *ctx, Reply::error(make_error("request.limit", "multipart body: too many or too large parts")));
-    if (!ok) return queue(c, *ctx, Reply::error(make_error("request.syntax", "malformed multipart/form-data body")));
-  }
-
-  auto responder = std::make_shared<Responder>();
-  responder->connection_ = c;
-  if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD)) responder->fd_ = ci->connect_fd;
-  ctx->responder = responder;
-  handler_.handle(req, responder);
-  {
-    std::unique_lock lock(responder->mu_);
-    if (responder->reply_) {
-      responder->state_ = Responder::State::done;
-      Reply r = *responder->reply_;
-      lock.unlock();
-      return queue(c, *ctx, r);
-    }
-    responder->state_ = Responder::State::suspended;
-    MHD_suspend_connection(c);
-  }
-  watch(responder);
-  return MHD_YES;
+  if (auto bad = split_multipart(c, *ctx)) return queue(c, *ctx, *bad);
+  return dispatch(c, *ctx);
 }
 
 void HttpServer::watch(std::shared_ptr<Responder> r) {

@@ -121,6 +121,10 @@ class HttpServer {
   friend struct Callbacks;
   int on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* upload_data,
                 std::size_t* upload_data_size, void** con_cls);
+  int begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method, RequestContext& ctx);
+  void collect_body(RequestContext& ctx, const char* data, std::size_t size);
+  std::optional<Reply> split_multipart(MHD_Connection* c, RequestContext& ctx);
+  int dispatch(MHD_Connection* c, RequestContext& ctx);
   int queue(MHD_Connection* c, RequestContext& ctx, const Reply& r);
   void watch(std::shared_ptr<Responder> r);
   void watcher_loop();

@@ -241,20 +241,28 @@ time.sleep(0.5)
 rss_end = rss_kib()
 alive = os.path.exists(f"/proc/{pid}")
 
-# No partial files: every file in the dump directory is listed by a sidecar, no temporaries.
+# No partial files: only finished dump files (NAME.png/.exr/.raw/.json, no temporaries),
+# each complete: PNGs end with IEND, EXRs start with the magic number, raw buffers have a
+# whole frame (32x18 at 4 or 8 bytes per pixel), sidecars parse and name existing files.
+# (Names are reused on purpose, so a name may keep files of an earlier dump's formats.)
+import re
 dumps = os.path.join(work, "dumps")
 names = sorted(os.listdir(dumps))
-listed = set()
+partial = []
 for n in names:
-    if n.endswith(".json"):
-        listed.add(n)
-        for p in json.load(open(os.path.join(dumps, n)))["files"].values():
-            listed.add(os.path.basename(p))
-partial = [n for n in names if n not in listed]
-for n in names:
-    if n.endswith(".png"):
-        d = open(os.path.join(dumps, n), "rb").read()
-        if not (d.startswith(PNG_SIG) and d.endswith(b"IEND\xaeB`\x82")): partial.append(n)
+    path = os.path.join(dumps, n)
+    m = re.fullmatch(r"soak-\d+\.(png|exr|raw|json)", n)
+    if not m:
+        partial.append(n); continue
+    d = open(path, "rb").read()
+    ext = m.group(1)
+    complete = {
+        "png": lambda: d.startswith(PNG_SIG) and d.endswith(b"IEND\xaeB`\x82"),
+        "exr": lambda: d.startswith(b"\x76\x2f\x31\x01") and len(d) > 300,
+        "raw": lambda: len(d) in (32 * 18 * 4, 32 * 18 * 8),
+        "json": lambda: all(os.path.exists(os.path.join(dumps, p)) for p in json.loads(d)["files"].values()),
+    }[ext]()
+    if not complete: partial.append(n)
 
 growth = 100.0 * (rss_end - rss_warm["kib"]) / rss_warm["kib"] if rss_warm.get("kib") else float("nan")
 summary = {

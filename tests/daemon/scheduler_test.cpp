@@ -1,0 +1,238 @@
+// The scheduler without HTTP: admission limits, coalescing, cancellation of queued and
+// running jobs, drain, and a render worker without a renderer. Jobs block on latches the
+// test opens, so every ordering here is forced, not timed.
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <future>
+#include <mutex>
+
+#include "daemon/scheduler.hpp"
+
+namespace hdrd::daemon {
+namespace {
+
+class FakeResource final : public RenderResource {
+ public:
+  nlohmann::json info() const override { return {{"backend", "fake"}}; }
+};
+
+RenderResourceFactory fake_factory() {
+  return [](int) -> Result<std::unique_ptr<RenderResource>> { return std::unique_ptr<RenderResource>(new FakeResource); };
+}
+
+// A gate a job waits at until the test opens it.
+class Gate {
+ public:
+  void open() {
+    std::lock_guard l(mu_);
+    open_ = true;
+    cv_.notify_all();
+  }
+  void wait() {
+    std::unique_lock l(mu_);
+    cv_.wait(l, [&] { return open_; });
+  }
+  void arrived() {
+    std::lock_guard l(mu_);
+    ++arrived_;
+    cv_.notify_all();
+  }
+  void wait_arrivals(int n) {
+    std::unique_lock l(mu_);
+    cv_.wait(l, [&] { return arrived_ >= n; });
+  }
+
+ private:
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool open_ = false;
+  int arrived_ = 0;
+};
+
+struct Delivery {
+  std::promise<std::pair<std::shared_ptr<const Reply>, bool>> promise;
+  std::future<std::pair<std::shared_ptr<const Reply>, bool>> future = promise.get_future();
+  std::function<void(std::shared_ptr<const Reply>, bool)> fn() {
+    return [this](std::shared_ptr<const Reply> r, bool coalesced) { promise.set_value({r, coalesced}); };
+  }
+};
+
+JobSpec gated_job(Gate& gate, std::string key, std::string body, std::atomic<int>* runs = nullptr) {
+  JobSpec s;
+  s.key = std::move(key);
+  s.deadline = Clock::now() + std::chrono::hours(1);
+  s.render = [&gate, runs](RenderResource* r, const JobControl&) -> Result<void> {
+    if (!r) return make_error("renderer.unavailable", "none");
+    if (runs) ++*runs;
+    gate.arrived();
+    gate.wait();
+    return {};
+  };
+  s.finish = [body](const JobControl&) { return Reply::json(200, body); };
+  return s;
+}
+
+TEST(Scheduler, AdmitsUpToCapacityThenRefuses) {
+  Scheduler s({/*render_workers=*/1, /*encode_threads=*/1, /*queue_depth=*/1, /*coalesce=*/false}, fake_factory());
+  s.start();
+  Gate gate;
+  std::vector<std::unique_ptr<Delivery>> d;
+  for (int i = 0; i < 3; ++i) {
+    d.push_back(std::make_unique<Delivery>());
+    ASSERT_TRUE(s.submit(gated_job(gate, "", std::to_string(i)), d.back()->fn(), true).ok()) << i;
+  }
+  Delivery extra;
+  auto refused = s.submit(gated_job(gate, "", "x"), extra.fn(), true);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, "queue.full");
+  EXPECT_EQ(s.stats().capacity, 3);
+  gate.open();
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(*d[std::size_t(i)]->future.get().first->body, std::to_string(i));
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+TEST(Scheduler, IdenticalKeysShareOneJob) {
+  Scheduler s({1, 1, 4, true}, fake_factory());
+  s.start();
+  Gate gate;
+  std::atomic<int> runs{0};
+  Delivery a, b, c;
+  ASSERT_TRUE(s.submit(gated_job(gate, "same", "frame", &runs), a.fn(), true).ok());
+  gate.wait_arrivals(1);  // the first is running: the others join it
+  ASSERT_TRUE(s.submit(gated_job(gate, "same", "frame", &runs), b.fn(), true).ok());
+  ASSERT_TRUE(s.submit(gated_job(gate, "same", "frame", &runs), c.fn(), true).ok());
+  EXPECT_EQ(s.stats().admitted, 1);
+  gate.open();
+  auto ra = a.future.get(), rb = b.future.get(), rc = c.future.get();
+  EXPECT_EQ(runs.load(), 1);
+  EXPECT_FALSE(ra.second);
+  EXPECT_TRUE(rb.second);
+  EXPECT_TRUE(rc.second);
+  EXPECT_EQ(ra.first, rb.first) << "the very same reply object";
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+TEST(Scheduler, CancellingAQueuedJobFreesItsSlotAndItNeverRuns) {
+  Scheduler s({1, 1, 0, false}, fake_factory());  // capacity 2
+  s.start();
+  Gate gate;
+  std::atomic<int> runs{0};
+  Delivery a, b, c;
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "a", &runs), a.fn(), true).ok());
+  gate.wait_arrivals(1);  // "a" holds the only render worker
+  auto wb = s.submit(gated_job(gate, "", "b", &runs), b.fn(), true);
+  ASSERT_TRUE(wb.ok());
+  EXPECT_EQ(s.submit(gated_job(gate, "", "c", &runs), c.fn(), true).error().code, "queue.full");
+  EXPECT_TRUE(s.cancel(*wb));  // "b"'s client left while it waited
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "c", &runs), c.fn(), true).ok()) << "its slot is free at once";
+  gate.open();
+  EXPECT_EQ(*a.future.get().first->body, "a");
+  EXPECT_EQ(*c.future.get().first->body, "c");
+  EXPECT_EQ(runs.load(), 2) << "the cancelled job never ran";
+  EXPECT_EQ(b.future.wait_for(std::chrono::seconds(0)), std::future_status::timeout);
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+TEST(Scheduler, CancelDetachesOneWaiterAndStopsAnAbandonedJob) {
+  Scheduler s({1, 1, 4, true}, fake_factory());
+  s.start();
+  Gate gate;
+  std::atomic<int> runs{0};
+  Delivery first, joined, queued;
+  auto w1 = s.submit(gated_job(gate, "k", "frame", &runs), first.fn(), true);
+  ASSERT_TRUE(w1.ok());
+  gate.wait_arrivals(1);
+  auto w2 = s.submit(gated_job(gate, "k", "frame", &runs), joined.fn(), true);
+  auto w3 = s.submit(gated_job(gate, "other", "other", &runs), queued.fn(), true);
+  ASSERT_TRUE(w2.ok() && w3.ok());
+  EXPECT_TRUE(s.cancel(*w1)) << "the first client left; the joined one still waits";
+  EXPECT_FALSE(s.cancel(*w1)) << "only once";
+  EXPECT_TRUE(s.cancel(*w3)) << "queued and abandoned: dropped";
+  EXPECT_EQ(s.stats().admitted, 1);
+  gate.open();
+  auto r = joined.future.get();
+  EXPECT_EQ(r.first->status, 200);
+  EXPECT_EQ(runs.load(), 1) << "the abandoned queued job never ran";
+  EXPECT_EQ(first.future.wait_for(std::chrono::seconds(0)), std::future_status::timeout) << "a cancelled waiter gets nothing";
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+TEST(Scheduler, DrainFinishesRunningJobsAndAnswersQueuedOnes) {
+  Scheduler s({1, 1, 4, false}, fake_factory());
+  s.start();
+  Gate gate;
+  Delivery running, queued;
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "done", nullptr), running.fn(), true).ok());
+  gate.wait_arrivals(1);
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "late", nullptr), queued.fn(), true).ok());
+  std::thread opener([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    gate.open();
+  });
+  s.drain_and_stop(std::chrono::seconds(30));  // waits for both
+  opener.join();
+  EXPECT_EQ(*running.future.get().first->body, "done");
+  EXPECT_EQ(*queued.future.get().first->body, "late");
+  Delivery after;
+  auto refused = s.submit(gated_job(gate, "", "x"), after.fn(), true);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, "server.draining");
+}
+
+TEST(Scheduler, DrainTimeoutCancelsWhatIsLeft) {
+  Scheduler s({1, 1, 4, false}, fake_factory());
+  s.start();
+  Gate gate;
+  Delivery running, queued;
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "a", nullptr), running.fn(), true).ok());
+  gate.wait_arrivals(1);
+  ASSERT_TRUE(s.submit(gated_job(gate, "", "b", nullptr), queued.fn(), true).ok());
+  std::thread stopper([&] { s.drain_and_stop(std::chrono::milliseconds(0)); });
+  auto q = queued.future.get();  // answered by the drain while "a" still runs
+  EXPECT_EQ(q.first->status, 503u);
+  EXPECT_EQ(q.first->error_code, "server.draining");
+  gate.open();
+  stopper.join();
+  auto r = running.future.get();
+  EXPECT_EQ(r.first->error_code, "server.draining") << "cancelled at its stage boundary";
+}
+
+TEST(Scheduler, NoRendererMeansRenderJobsAreRefused) {
+  Scheduler s({1, 1, 4, false},
+              [](int) -> Result<std::unique_ptr<RenderResource>> { return make_error("gl.egl", "no EGL here"); });
+  s.start();
+  EXPECT_FALSE(s.renderer_available());
+  EXPECT_EQ(s.stats().workers[0]["error"], "no EGL here");
+  Gate gate;
+  Delivery d;
+  auto r = s.submit(gated_job(gate, "", "x"), d.fn(), true);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "renderer.unavailable");
+  // Jobs without a render stage still run.
+  JobSpec plain;
+  plain.deadline = Clock::now() + std::chrono::hours(1);
+  plain.finish = [](const JobControl&) { return Reply::json(200, "ok"); };
+  Delivery e;
+  ASSERT_TRUE(s.submit(std::move(plain), e.fn(), false).ok());
+  EXPECT_EQ(*e.future.get().first->body, "ok");
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+TEST(Scheduler, ExpiredJobsAreAnsweredWithTimeout) {
+  Scheduler s({1, 1, 4, false}, fake_factory());
+  s.start();
+  JobSpec j;
+  j.deadline = Clock::now() - std::chrono::seconds(1);
+  j.render = [](RenderResource*, const JobControl&) -> Result<void> { return {}; };
+  j.finish = [](const JobControl&) { return Reply::json(200, "late"); };
+  Delivery d;
+  ASSERT_TRUE(s.submit(std::move(j), d.fn(), true).ok());
+  auto r = d.future.get();
+  EXPECT_EQ(r.first->status, 504u);
+  EXPECT_EQ(r.first->error_code, "request.timeout");
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+}  // namespace
+}  // namespace hdrd::daemon
