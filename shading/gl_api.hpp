@@ -87,6 +87,7 @@
   X(GetActiveUniformBlockiv, PFNGLGETACTIVEUNIFORMBLOCKIVPROC)          \
   X(UniformBlockBinding, PFNGLUNIFORMBLOCKBINDINGPROC)                  \
   X(Uniform1i, PFNGLUNIFORM1IPROC)                                      \
+  X(Uniform2i, PFNGLUNIFORM2IPROC)                                      \
   X(Uniform1f, PFNGLUNIFORM1FPROC)
 
 namespace hdrd::shading {

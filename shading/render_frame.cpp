@@ -219,32 +219,62 @@ void resolve_pass(Renderer::Impl& r, double weight_exposure) {
   gl.DrawArrays(GL_TRIANGLES, 0, 3);
 }
 
-// Reads the single-sample target as float (GL rows are bottom-up), undoing pre-exposure.
-Image read_frame(Renderer::Impl& r, double pre_exposure) {
-  const GlApi& gl = *r.gl;
-  const Targets& t = r.targets;
-  Image img(t.width, t.height);
-  gl.BindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
+// Reads an RGBA32F/RGBA16F framebuffer as float (GL rows are bottom-up), times `scale`.
+Image read_rgba(const GlApi& gl, GLuint fbo, int width, int height, double scale) {
+  Image img(width, height);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
   gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  gl.ReadPixels(0, 0, t.width, t.height, GL_RGBA, GL_FLOAT, img.rgba.data());
-  const std::size_t row = static_cast<std::size_t>(t.width) * 4;
+  gl.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, img.rgba.data());
+  const std::size_t row = static_cast<std::size_t>(width) * 4;
   std::vector<float> tmp(row);
-  for (int y = 0; y < t.height / 2; ++y) {
+  for (int y = 0; y < height / 2; ++y) {
     float* a = img.rgba.data() + static_cast<std::size_t>(y) * row;
-    float* b = img.rgba.data() + static_cast<std::size_t>(t.height - 1 - y) * row;
+    float* b = img.rgba.data() + static_cast<std::size_t>(height - 1 - y) * row;
     std::memcpy(tmp.data(), a, row * sizeof(float));
     std::memcpy(a, b, row * sizeof(float));
     std::memcpy(b, tmp.data(), row * sizeof(float));
   }
-  const float inv = static_cast<float>(1.0 / pre_exposure);
+  const auto s = static_cast<float>(scale);
   for (std::size_t i = 0; i < img.rgba.size(); i += 4) {
-    img.rgba[i] *= inv;
-    img.rgba[i + 1] *= inv;
-    img.rgba[i + 2] *= inv;
+    img.rgba[i] *= s;
+    img.rgba[i + 1] *= s;
+    img.rgba[i + 2] *= s;
     img.rgba[i + 3] = 1.0f;
   }
   return img;
+}
+
+// Block means for metering: 1/kMeteringBlock^2 of the pixels, absolute cd/m2.
+Result<Image> read_reduced(Renderer::Impl& r, double pre_exposure) {
+  const GlApi& gl = *r.gl;
+  const Targets& t = r.targets;
+  const int w = (t.width + kMeteringBlock - 1) / kMeteringBlock, h = (t.height + kMeteringBlock - 1) / kMeteringBlock;
+  if (!r.reduced || r.reduced_width != w || r.reduced_height != h) {
+    r.reduced = gen_texture(gl);
+    gl.BindTexture(GL_TEXTURE_2D, r.reduced.id());
+    gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, w, h);
+    r.reduced_fbo = gen_framebuffer(gl);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, r.reduced_fbo.id());
+    gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, r.reduced.id(), 0);
+    if (auto e = check_framebuffer(gl, "metering target"); !e) return e.error();
+    r.reduced_width = w;
+    r.reduced_height = h;
+  }
+  gl.BindFramebuffer(GL_FRAMEBUFFER, r.reduced_fbo.id());
+  gl.Viewport(0, 0, w, h);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.Disable(GL_CULL_FACE);
+  gl.Disable(GL_BLEND);
+  gl.UseProgram(r.reduce_program.id());
+  gl.Uniform1i(r.reduce_block_loc, kMeteringBlock);
+  gl.Uniform2i(r.reduce_size_loc, t.width, t.height);
+  gl.Uniform1f(r.reduce_scale_loc, static_cast<float>(1.0 / pre_exposure));
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, t.color.id());
+  gl.BindVertexArray(r.empty_vao.id());
+  gl.DrawArrays(GL_TRIANGLES, 0, 3);
+  return read_rgba(gl, r.reduced_fbo.id(), w, h, 1.0);
 }
 
 Result<void> check_settings(const RenderSettings& s) {
@@ -344,7 +374,13 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   if (auto e = check_gl(gl, "rendering"); !e) return e.error();
 
   const auto t1 = Clock::now();
-  out.scene_nits = read_frame(r, pre_exposure);
+  if (settings.readback == Readback::full) {
+    out.scene_nits = read_rgba(gl, r.targets.fbo.id(), r.targets.width, r.targets.height, 1.0 / pre_exposure);
+  } else {
+    auto reduced = read_reduced(r, pre_exposure);
+    if (!reduced) return reduced.error();
+    out.metering_nits = std::move(*reduced);
+  }
   out.readback_ms = ms_since(t1);
   if (auto e = check_gl(gl, "reading the frame back"); !e) return e.error();
   r.has_frame = true;
@@ -352,6 +388,16 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   gl.BindVertexArray(0);
   gl.UseProgram(0);
   return out;
+}
+
+Result<Image> Renderer::read_frame() {
+  Impl& r = *impl_;
+  if (!r.has_frame) return make_error("render.no_frame", "nothing rendered yet");
+  CurrentContext current(*context_);
+  if (!current.status()) return current.status().error();
+  Image img = read_rgba(*r.gl, r.targets.fbo.id(), r.targets.width, r.targets.height, 1.0 / r.last_pre_exposure);
+  if (auto e = check_gl(*r.gl, "reading the frame back"); !e) return e.error();
+  return img;
 }
 
 namespace {
@@ -379,6 +425,7 @@ Result<RenderResult> Renderer::render(const RenderRequest& request) {
   settings.samples = request.samples;
   settings.camera = request.camera;
   settings.target = request.target;
+  settings.readback = request.readback;
   if (auto r = check_settings(settings); !r) return r.error();  // before any loading work
   auto scene = request.scene_json ? parse_scene_json(*request.scene_json, request.load)
                                   : load_scene(request.scene.empty() ? default_scene_name() : request.scene,

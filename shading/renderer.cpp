@@ -44,6 +44,12 @@ Result<void> init_impl(Renderer::Impl& r) {
   auto resolve = build_program(gl, "resolve", shaders::fullscreen_vertex(gl), shaders::resolve_fragment(gl));
   if (!resolve) return resolve.error();
   r.resolve_program = std::move(*resolve);
+  auto reduce = build_program(gl, "reduce", shaders::fullscreen_vertex(gl), shaders::reduce_fragment(gl));
+  if (!reduce) return reduce.error();
+  r.reduce_program = std::move(*reduce);
+  r.reduce_block_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_block");
+  r.reduce_size_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_size");
+  r.reduce_scale_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_scale");
   r.resolve_samples_loc = gl.GetUniformLocation(r.resolve_program.id(), "u_samples");
   r.resolve_exposure_loc = gl.GetUniformLocation(r.resolve_program.id(), "u_weight_exposure");
   gl.GetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &r.ubo_alignment);

@@ -33,6 +33,9 @@ enum class TargetFormat { rgba32f, rgba16f };
 
 inline constexpr int kMaxSamples = 16;
 
+enum class Readback { full, reduced };
+inline constexpr int kMeteringBlock = 8;  // reduced readback: 8x8 block means (1/64 of the bytes)
+
 // How MSAA samples become a pixel. tonemap_weighted (default): weights 1 / (1 + L), with
 // L the sample's luminance in "white card = 1" units (pi / E of the dominant light), so
 // the result is the inverse Reinhard of the mean Reinhard-mapped sample (RTR4 §5.4.2,
@@ -47,6 +50,10 @@ struct RenderSettings {
   TargetFormat target = TargetFormat::rgba32f;
   MsaaResolve resolve = MsaaResolve::tonemap_weighted;
   int shadow_map_size = 2048;
+  // full: read the float frame back (scene_nits). reduced: read back only block means of
+  // kMeteringBlock x kMeteringBlock pixels (metering_nits), e.g. to meter exposure when the
+  // frame is encoded on the GPU; read_frame() can still fetch the full frame afterwards.
+  Readback readback = Readback::full;
 };
 
 struct RenderRequest {
@@ -58,11 +65,13 @@ struct RenderRequest {
   std::optional<CameraOverride> camera;
   Backend backend = Backend::automatic;  // for Renderer::create; render() checks it matches
   TargetFormat target = TargetFormat::rgba32f;
+  Readback readback = Readback::full;
   SceneLoadOptions load;
 };
 
 struct RenderResult {
-  Image scene_nits;  // linear Rec.709, cd/m2, RGBA float32 (A = 1), rows top-down
+  Image scene_nits;     // linear Rec.709, cd/m2, RGBA float32 (A = 1), rows top-down (Readback::full)
+  Image metering_nits;  // Readback::reduced: kMeteringBlock^2 block means, same units
   std::string scene_name;
   std::string backend;      // "egl-device", "egl-surfaceless", "osmesa"
   std::string gl_renderer;  // GL_RENDERER
@@ -89,6 +98,9 @@ class Renderer {
   // Renders an already built scene (validated and possibly modified: degenerate
   // triangles dropped, missing normals computed).
   Result<RenderResult> render(Scene scene, const RenderSettings& settings);
+
+  // The full float frame of the last render (e.g. after a reduced readback).
+  Result<Image> read_frame();
 
   const GlContext& context() const { return *context_; }
   std::string backend_name() const { return context_->backend_name(); }

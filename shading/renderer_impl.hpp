@@ -35,8 +35,11 @@ struct GpuScene {
 struct Renderer::Impl {
   GlContext* context = nullptr;
   const GlApi* gl = nullptr;
-  GlName lit_program, shadow_program, resolve_program;
+  GlName lit_program, shadow_program, resolve_program, reduce_program;
   GLint resolve_samples_loc = -1, resolve_exposure_loc = -1;
+  GLint reduce_block_loc = -1, reduce_size_loc = -1, reduce_scale_loc = -1;
+  GlName reduced, reduced_fbo;  // the block-mean target of Readback::reduced
+  int reduced_width = 0, reduced_height = 0;
   GlName ambient_lut, white_texture, empty_vao;
   GLint ubo_alignment = 256;
   Targets targets;

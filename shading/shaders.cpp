@@ -285,6 +285,28 @@ void main() {
 }
 )";
 
+constexpr const char* kReduceFragment = R"(
+layout(location = 0) out vec4 o_color;
+layout(binding = 0) uniform sampler2D u_src;
+uniform int u_block;
+uniform ivec2 u_size;
+uniform float u_scale;
+void main() {
+  ivec2 base = ivec2(gl_FragCoord.xy) * u_block;
+  vec3 sum = vec3(0.0);
+  int n = 0;
+  for (int y = 0; y < u_block; ++y)
+    for (int x = 0; x < u_block; ++x) {
+      ivec2 p = base + ivec2(x, y);
+      if (p.x < u_size.x && p.y < u_size.y) {
+        sum += texelFetch(u_src, p, 0).rgb;
+        ++n;
+      }
+    }
+  o_color = vec4(sum / float(max(n, 1)) * u_scale, 1.0);
+}
+)";
+
 std::string head(const GlApi& gl) { return glsl_preamble(gl) + constants(); }
 
 }  // namespace
@@ -295,5 +317,6 @@ std::string shadow_vertex(const GlApi& gl) { return head(gl) + kBlocks + kShadow
 std::string shadow_fragment(const GlApi& gl) { return glsl_preamble(gl) + kShadowFragment; }
 std::string fullscreen_vertex(const GlApi& gl) { return glsl_preamble(gl) + std::string(fullscreen_vertex_body()); }
 std::string resolve_fragment(const GlApi& gl) { return glsl_preamble(gl) + kResolveFragment; }
+std::string reduce_fragment(const GlApi& gl) { return glsl_preamble(gl) + kReduceFragment; }
 
 }  // namespace hdrd::shading::shaders

@@ -17,5 +17,7 @@ std::string fullscreen_vertex(const GlApi& gl);
 // MSAA resolve weighted by 1 / (1 + exposure * luma) (RTR4 §5.4.2, Karis 2014): bright
 // samples no longer dominate an edge pixel, so edges survive tone mapping.
 std::string resolve_fragment(const GlApi& gl);
+// Block means of the frame for a reduced readback (exposure metering), undoing pre-exposure.
+std::string reduce_fragment(const GlApi& gl);
 
 }  // namespace hdrd::shading::shaders

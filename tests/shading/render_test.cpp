@@ -376,6 +376,38 @@ TEST(Render, SurfacelessPlatformWorksToo) {
   EXPECT_EQ(f->scene_name, default_scene_name());
 }
 
+TEST(Render, ReducedReadbackIsTheBlockMeanOfTheFrame) {
+  HDRD_REQUIRE_RENDERER(renderer);
+  RenderRequest q;
+  q.scene = "hdr";
+  q.width = 100;  // not a multiple of the block: edge blocks average fewer pixels
+  q.height = 60;
+  auto full = renderer.render(q);
+  ASSERT_TRUE(full.ok());
+  q.readback = Readback::reduced;
+  auto reduced = renderer.render(q);
+  ASSERT_TRUE(reduced.ok());
+  EXPECT_EQ(reduced->scene_nits.pixel_count(), 0u);
+  const Image& m = reduced->metering_nits;
+  ASSERT_EQ(m.width, 13);
+  ASSERT_EQ(m.height, 8);
+  // Block means counted from the bottom-left corner (GL's origin), rows then flipped.
+  for (int by = 0; by < m.height; ++by)
+    for (int bx = 0; bx < m.width; ++bx) {
+      double sum[3] = {0, 0, 0};
+      int n = 0;
+      for (int gy = by * kMeteringBlock; gy < std::min(q.height, (by + 1) * kMeteringBlock); ++gy)
+        for (int x = bx * kMeteringBlock; x < std::min(q.width, (bx + 1) * kMeteringBlock); ++x, ++n)
+          for (int c = 0; c < 3; ++c) sum[c] += full->scene_nits.px(x, q.height - 1 - gy)[c];
+      const float* p = m.px(bx, m.height - 1 - by);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(p[c], sum[c] / n, 1e-5 * sum[c] / n + 1e-6) << bx << "," << by;
+    }
+  // The full frame is still there.
+  auto again = renderer.read_frame();
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->rgba, full->scene_nits.rgba);
+}
+
 TEST(Render, RenderersOnSeveralThreadsAtOnce) {
   HDRD_REQUIRE_RENDERER(renderer);
   // The daemon keeps one renderer per worker thread: two contexts rendering at the same

@@ -33,8 +33,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-shading::RenderResult render_scene(const RenderOptions& o, shading::Renderer& renderer) {
+shading::RenderResult render_scene(const RenderOptions& o, shading::Renderer& renderer, shading::Readback readback) {
   shading::RenderRequest q;
+  q.readback = readback;
   q.scene = o.scene.empty() ? shading::default_scene_name() : o.scene;
   q.width = o.width;
   q.height = o.height;
@@ -54,8 +55,9 @@ shading::RenderResult render_scene(const RenderOptions& o, shading::Renderer& re
 }
 
 // GPU when asked or possible; the CPU for display-referred EXR dumps (the GPU program
-// writes only the signal) and for what the GPU program does not cover.
-EncodedFrame encode(const RenderOptions& o, shading::Renderer& renderer, const SceneInput& in,
+// writes only the signal) and for what the GPU program does not cover. `in` is the full
+// frame, or null when only block means were read back (then it is fetched on demand).
+EncodedFrame encode(const RenderOptions& o, shading::Renderer& renderer, const Image* full,
                     const PreparedPipeline& prepared, std::vector<std::string>& notes) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool want_gpu = o.encoder == "gpu" || (o.encoder == "auto" && !prepared.settings.keep_display_nits);
@@ -73,6 +75,16 @@ EncodedFrame encode(const RenderOptions& o, shading::Renderer& renderer, const S
   } else if (o.encoder == "auto") {
     notes.push_back("encoded on the CPU: the display-referred EXR dump needs the CPU path");
   }
+  Image fetched;
+  if (!full) {
+    auto img = renderer.read_frame();
+    if (!img) throw HdrdError(img.error());
+    fetched = std::move(*img);
+    full = &fetched;
+  }
+  SceneInput in;
+  in.image = full;
+  in.units = InputUnits::absolute;
   auto f = encode_prepared(in, prepared);
   if (!f) throw HdrdError(f.error());
   progress("encoded {} on the CPU in {:.0f} ms", to_string(prepared.settings.target.mode), ms_since(t0));
@@ -95,17 +107,23 @@ void run(const RenderOptions& o) {
 
   auto renderer = shading::Renderer::create(*backend);
   if (!renderer) throw HdrdError(renderer.error());
-  const shading::RenderResult r = render_scene(o, **renderer);
+  // Without a scene EXR or CPU-side outputs, only 8x8 block means come back for metering
+  // and the frame stays on the GPU for the encode pass.
+  const bool full = !o.no_scene_exr || o.encoder == "cpu" || settings.keep_display_nits;
+  const shading::RenderResult r =
+      render_scene(o, **renderer, full ? shading::Readback::full : shading::Readback::reduced);
 
   SceneInput in;
-  in.image = &r.scene_nits;
+  in.image = full ? &r.scene_nits : &r.metering_nits;
   in.to_working = color::to_working(color::Space::rec709);
   in.units = InputUnits::absolute;
   in.white_luminance_nits = 1.0;
   if (r.dominant_illuminance_lux > 0) in.illuminance_lux = r.dominant_illuminance_lux;
   auto prepared = prepare_pipeline(in, settings);
   if (!prepared) throw HdrdError(prepared.error());
-  EncodedFrame frame = encode(o, **renderer, in, *prepared, notes);
+  if (!full) notes.push_back(fmt::format("exposure metered on {}x{} block means", shading::kMeteringBlock,
+                                         shading::kMeteringBlock));
+  EncodedFrame frame = encode(o, **renderer, full ? &r.scene_nits : nullptr, *prepared, notes);
 
   const std::filesystem::path scene_exr = o.outbase + ".scene.exr";
   frame.settings["render"] = {{"scene", r.scene_name},
