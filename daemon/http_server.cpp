@@ -93,6 +93,14 @@ MHD_Result collect_part(void* cls, MHD_ValueKind, const char* key, const char* f
   return MHD_YES;
 }
 
+// Header values come partly from data (scene names, warnings): no control characters may
+// reach the wire (RFC 9110 §5.5), so they become spaces.
+std::string header_safe(std::string v) {
+  for (char& ch : v)
+    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ch = ' ';
+  return v;
+}
+
 void free_body(void* cls) { delete static_cast<std::shared_ptr<const std::string>*>(cls); }
 
 }  // namespace
@@ -242,7 +250,7 @@ int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
   }
   MHD_add_response_header(resp, "Content-Type", r.content_type.c_str());
   MHD_add_response_header(resp, "X-Hdrd-Request-Id", std::to_string(ctx.req.id).c_str());
-  for (const auto& [k, v] : r.headers) MHD_add_response_header(resp, k.c_str(), v.c_str());
+  for (const auto& [k, v] : r.headers) MHD_add_response_header(resp, k.c_str(), header_safe(v).c_str());
   const MHD_Result ok = MHD_queue_response(c, r.status, resp);
   MHD_destroy_response(resp);
   handler_.finished(ctx.req, r, ctx.req.body.size());
