@@ -63,8 +63,10 @@ constexpr std::array<Bar, 15> kRow5{{{"709 yellow", 80}, {"709 cyan", 80}, {"709
                                      {"-2% grey", 70}, {"0% grey", 68}, {"+2% grey", 70}, {"0% grey", 68},
                                      {"+4% grey", 70}, {"0% grey", 238}, {"ref grey", 438}, {"0% grey", 282},
                                      {"709 magenta", 80}, {"709 red", 80}, {"709 blue", 80}}};
-// Row 4: 0 % black (240), -7 % (559), a ramp from -7 % to 109 % (1014), 109 % (107).
+// Row 4: 0 % black (240), -7 % (559), a ramp (1014), 109 % (107). At 1920 pixels the ramp
+// rises one code per pixel from 5 to 1018, between the -7 % (4) and 109 % (1019) patches.
 constexpr int kRow4Black = 240, kRow4Low = 559, kRow4Ramp = 1014;
+constexpr int kRampFirst = 5, kRampLast = 1018;
 
 }  // namespace
 
@@ -119,14 +121,15 @@ std::vector<Code3> bt2111_codes(Bt2111System s, int width, int height) {
   fill_row(0, y_at(1), kRow1.data(), 9);
   fill_row(y_at(1), y_at(7), kRow2.data(), 9);
   fill_row(y_at(7), y_at(8), kRow3.data(), 15);
-  // Row 4: the ramp from code 4 to 1019 across its width.
+  // Row 4: the ramp from code 5 to 1018 across its width (one code per pixel at 1920).
   const int x1 = x_at(kRow4Black), x2 = x_at(kRow4Black + kRow4Low), x3 = x_at(kRow4Black + kRow4Low + kRow4Ramp);
+  const double ramp_step = double(kRampLast - kRampFirst) / std::max(1, x3 - x2 - 1);
   for (int y = y_at(8); y < y_at(9); ++y)
     for (int x = 0; x < width; ++x) {
       int code;
       if (x < x1) code = narrow(0.0);
       else if (x < x2) code = 4;
-      else if (x < x3) code = 4 + (1019 - 4) * (x - x2) / std::max(1, x3 - x2);
+      else if (x < x3) code = kRampFirst + static_cast<int>(std::lround(ramp_step * (x - x2)));
       else code = 1019;
       out[static_cast<std::size_t>(y) * width + x] = grey(code);
     }
