@@ -28,29 +28,35 @@ Image uniform(int w, int h, color::Vec3 v) {
   return img;
 }
 
+// A frame as the checks get it: through SuiteOptions::tamper when a test sets one.
+Result<EncodedFrame> delivered(Result<EncodedFrame> f, const SuiteOptions& o) {
+  if (f && o.tamper) o.tamper(*f);
+  return f;
+}
+
 // Relative Rec.709 input (1.0 = paper white), manual exposure at 0 EV.
 Result<EncodedFrame> encode_relative(const Image& img, const DisplayTarget& t, const std::string& curve,
-                                     bool keep_nits = false) {
+                                     const SuiteOptions& o, bool keep_nits = false) {
   EncodeSettings s;
   s.target = t;
   s.tone.curve = curve;
   s.keep_display_nits = keep_nits;
   SceneInput in;
   in.image = &img;
-  return encode_frame(in, s);
+  return delivered(encode_frame(in, s), o);
 }
 
 Check failed(std::string name, std::string source, const Error& e) {
   return Check{std::move(name), std::move(source), false, false, e.message};
 }
 
-void paper_white_checks(Report& r) {
+void paper_white_checks(Report& r, const SuiteOptions& o) {
   const Image white = uniform(16, 16, {1, 1, 1});
   const bool claims_apply = r.target.peak_nits >= 2 * r.target.paper_white_nits;
   for (const auto& info : tonemap::curves()) {
     const std::string curve(info.name);
     if (curve != "clip" && !(info.keeps_reference_white && claims_apply)) continue;
-    auto f = encode_relative(white, r.target, curve);
+    auto f = encode_relative(white, r.target, curve, o);
     r.checks.push_back(f ? check_paper_white(*f, curve) : failed("paper-white/" + curve, "encode", f.error()));
   }
   if (!claims_apply)
@@ -59,7 +65,7 @@ void paper_white_checks(Report& r) {
                                                      r.target.paper_white_nits)});
 }
 
-void primaries_checks(Report& r) {
+void primaries_checks(Report& r, const SuiteOptions& o) {
   Image img(48, 8);
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 48; ++x) {
@@ -68,13 +74,13 @@ void primaries_checks(Report& r) {
       p[3] = 1;
     }
   for (const std::string& curve : {std::string("clip"), std::string(tonemap::default_curve(r.target.mode))}) {
-    auto f = encode_relative(img, r.target, curve);
+    auto f = encode_relative(img, r.target, curve, o);
     r.checks.push_back(f ? check_rec709_primaries(*f, curve) : failed("rec709-primaries/" + curve, "encode", f.error()));
   }
 }
 
 // A ramp from 1e-3 to 1e3 x paper white: the highest codes, the content light and the dumps.
-void ramp_checks(Report& r) {
+void ramp_checks(Report& r, const SuiteOptions& o) {
   Image ramp(256, 16);
   for (int y = 0; y < 16; ++y)
     for (int x = 0; x < 256; ++x) {
@@ -84,7 +90,7 @@ void ramp_checks(Report& r) {
       p[3] = 1;
     }
   for (const std::string& curve : {std::string("clip"), std::string(tonemap::default_curve(r.target.mode))}) {
-    auto f = encode_relative(ramp, r.target, curve, true);
+    auto f = encode_relative(ramp, r.target, curve, o, true);
     if (!f) { r.checks.push_back(failed("peak/ramp-" + curve, "encode", f.error())); continue; }
     r.checks.push_back(check_peak(*f, "ramp-" + curve));
     r.checks.push_back(check_content_light(*f, "ramp-" + curve));
@@ -112,12 +118,12 @@ void ramp_checks(Report& r) {
   }
 }
 
-void pattern_checks(Report& r) {
+void pattern_checks(Report& r, const SuiteOptions& so) {
   PatternOptions o;
   o.width = 96, o.height = 54, o.labels = false;
   for (double level : {r.target.paper_white_nits, r.target.peak_nits * 0.5, r.target.peak_nits}) {
     o.level_nits = level;
-    auto f = make_pattern("window", r.target, o, false);
+    auto f = delivered(make_pattern("window", r.target, o, false), so);
     if (!f) { r.checks.push_back(failed("window", "pattern", f.error())); continue; }
     Check c = check_window(*f, level);
     c.name = fmt::format("window/{:g}", level);
@@ -126,7 +132,7 @@ void pattern_checks(Report& r) {
   }
   o.level_nits = 0;
   for (const char* name : {"pq-ramp", "clipping", "near-black", "sdr-grey"}) {
-    auto f = make_pattern(name, r.target, o, false);
+    auto f = delivered(make_pattern(name, r.target, o, false), so);
     if (!f) { r.checks.push_back(failed(std::string("pattern/") + name, "pattern", f.error())); continue; }
     r.checks.push_back(check_peak(*f, name));
     r.checks.push_back(check_content_light(*f, name));
@@ -151,7 +157,7 @@ void render_checks(Report& r, const SuiteOptions& o) {
     SceneInput in;
     in.image = &img->scene_nits;
     in.units = InputUnits::absolute;
-    auto f = encode_frame(in, s);
+    auto f = delivered(encode_frame(in, s), o);
     if (!f) { r.checks.push_back(failed(std::string("render/") + scene, "encode", f.error())); continue; }
     r.checks.push_back(check_peak(*f, std::string("scene-") + scene));
     r.checks.push_back(check_content_light(*f, std::string("scene-") + scene));
@@ -197,11 +203,11 @@ Report run_suite(const DisplayTarget& target, std::string_view mode_name, const 
   Report r;
   r.mode = std::string(mode_name);
   r.target = target;
-  paper_white_checks(r);
-  primaries_checks(r);
-  ramp_checks(r);
+  paper_white_checks(r, o);
+  primaries_checks(r, o);
+  ramp_checks(r, o);
   for (auto& c : check_curves_monotonic(target)) r.checks.push_back(std::move(c));
-  pattern_checks(r);
+  pattern_checks(r, o);
   if (o.render) render_checks(r, o);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -67,6 +68,9 @@ Check check_window(const EncodedFrame& frame, double level_nits);
 struct SuiteOptions {
   bool render = true;        // render the built-in scenes (skipped cleanly without GL)
   int render_width = 96, render_height = 54;
+  // Testing the suite itself: called on every frame right after it is encoded, before any
+  // check sees it, so a test can stand in a deliberately broken encoder.
+  std::function<void(EncodedFrame&)> tamper;
 };
 Report run_suite(const DisplayTarget& target, std::string_view mode_name, const SuiteOptions& options = {});
 

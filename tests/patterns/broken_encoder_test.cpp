@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
+
+#include <fmt/format.h>
 
 #include "display/hdr_metadata.hpp"
 #include "encode/io.hpp"
@@ -54,8 +57,11 @@ TEST(BrokenEncoder, PaperWhiteOffByTwoCodesFails) {
 TEST(BrokenEncoder, HlgPaperWhiteOffFails) {
   EncodedFrame f = encode_uniform(default_target(Mode::hlg), 1.0);
   ASSERT_TRUE(check_paper_white(f, "clip").passed) << check_paper_white(f, "clip").detail;
+  // BT.2408: 203 cd/m2 on a 1000 cd/m2 HLG display is 75 %, 10-bit full range code 767.
   shift_codes(f, -3);
-  EXPECT_FALSE(check_paper_white(f, "clip").passed);
+  const Check c = check_paper_white(f, "clip");
+  EXPECT_FALSE(c.passed);
+  EXPECT_NE(c.detail.find("(764, 764, 764) vs 767"), std::string::npos) << c.detail;
 }
 
 TEST(BrokenEncoder, ScrgbWhiteNotOver80Fails) {
@@ -75,14 +81,19 @@ TEST(BrokenEncoder, CodesAboveThePeakFail) {
   EncodedFrame f = encode_uniform(t, 100.0);  // far above the peak: clipped to 600 cd/m2
   ASSERT_TRUE(check_peak(f, "t").passed) << check_peak(f, "t").detail;
   shift_codes(f, 1);
-  EXPECT_FALSE(check_peak(f, "t").passed);
+  const Check c = check_peak(f, "t");
+  EXPECT_FALSE(c.passed);
+  // 600 cd/m2 is PQ code 712 (10-bit full range); the broken encoder wrote 713.
+  EXPECT_NE(c.detail.find("highest code 713 vs peak code 712"), std::string::npos) << c.detail;
 }
 
 TEST(BrokenEncoder, WrongContentLightFails) {
   EncodedFrame f = encode_uniform(default_target(Mode::hdr10), 2.0);
   ASSERT_TRUE(check_content_light(f, "t").passed) << check_content_light(f, "t").detail;
   f.content_light.max_cll_nits *= 1.05;
-  EXPECT_FALSE(check_content_light(f, "t").passed);
+  const Check c = check_content_light(f, "t");
+  EXPECT_FALSE(c.passed);
+  EXPECT_NE(c.detail.find(fmt::format("frame says {:.2f}", f.content_light.max_cll_nits)), std::string::npos) << c.detail;
 }
 
 TEST(BrokenEncoder, CorruptedMetadataBytesFail) {
@@ -143,7 +154,41 @@ TEST(BrokenEncoder, WindowOffByTwoCodesFails) {
   ASSERT_TRUE(f);
   ASSERT_TRUE(check_window(*f, 400).passed);
   shift_codes(*f, 2);
-  EXPECT_FALSE(check_window(*f, 400).passed);
+  const Check c = check_window(*f, 400);
+  EXPECT_FALSE(c.passed);
+  // REFERENCE.md §2: 400 cd/m2 is PQ code 668 (10-bit full range).
+  EXPECT_NE(c.detail.find("codes (670, 670, 670) vs 668"), std::string::npos) << c.detail;
+}
+
+// The whole suite over a deliberately broken encoder (every code two too high, after an
+// otherwise correct encode): the report fails, and it fails on the checks that measure
+// codes, not on ones that cannot see the frames (the tone curves' monotonicity).
+TEST(BrokenEncoder, WholeSuiteFailsForTheRightChecks) {
+  SuiteOptions o;
+  o.render = false;
+  const DisplayTarget t = default_target(Mode::hdr10);
+  const Report good = run_suite(t, "hdr10", o);
+  ASSERT_TRUE(good.passed()) << good.to_json().dump(1);
+  o.tamper = [](EncodedFrame& f) { shift_codes(f, 2); };
+  const Report bad = run_suite(t, "hdr10", o);
+  EXPECT_FALSE(bad.passed());
+  std::map<std::string, const Check*> by_name;
+  for (const auto& c : bad.checks) by_name[c.name] = &c;
+  for (const char* name : {"paper-white/clip", "window/203", "window/1000", "peak/ramp-clip", "content-light/ramp-clip",
+                           "metadata-blob"}) {
+    ASSERT_TRUE(by_name.count(name)) << name;
+    EXPECT_FALSE(by_name[name]->passed) << name << ": " << by_name[name]->detail;
+  }
+  EXPECT_NE(by_name["paper-white/clip"]->detail.find("(596, 596, 596) vs 594"), std::string::npos)
+      << by_name["paper-white/clip"]->detail;
+  int curve_checks = 0;
+  for (const auto& c : bad.checks)
+    if (c.name.rfind("monotonic/", 0) == 0) {
+      EXPECT_TRUE(c.passed) << c.name;
+      ++curve_checks;
+    }
+  EXPECT_GT(curve_checks, 3);
+  EXPECT_EQ(bad.to_json()["passed"], false);
 }
 
 TEST(BrokenEncoder, SuiteReportFailsWhenOneCheckFails) {

@@ -1,6 +1,8 @@
 // The display-mode suite end to end: `hdrd selftest` for every mode of docs/display-modes.md.
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include <nlohmann/json.hpp>
 
 #include "tests/testing/testing.hpp"
@@ -8,9 +10,13 @@
 namespace {
 
 struct ModeCase {
-  const char* name;
-  const char* args;
+  const char* name;  // the test's name: hdr10_1000, ...
+  const char* args;  // hdrd selftest arguments
 };
+
+// What gtest prints for the parameter (test listings, failures): the mode and its
+// arguments, not the struct's bytes.
+void PrintTo(const ModeCase& c, std::ostream* os) { *os << c.name << " (hdrd selftest " << c.args << ")"; }
 
 class DisplayModes : public ::testing::TestWithParam<ModeCase> {};
 

@@ -45,6 +45,33 @@ TEST(Window, LevelWithinOneCodeAndAreaAsRequested) {
     }
 }
 
+// The same against published codes rather than the transfer functions the encoder uses:
+// REFERENCE.md §2 (PQ table) and ../shared/reference/published_vectors.md §3, 10-bit
+// PQ codes for full and narrow range, at every window area.
+TEST(Window, HitsThePublishedPqCodesWithinOneCode) {
+  struct Published {
+    double nits;
+    int full, narrow;
+  };
+  const Published table[] = {{0.1, 64, 119}, {1, 153, 195}, {100, 520, 509}, {203, 594, 573},
+                             {400, 668, 636}, {1000, 769, 723}, {4000, 923, 855}};
+  for (Range range : {Range::full, Range::narrow}) {
+    DisplayTarget t = default_target(Mode::hdr10);
+    t.peak_nits = 4000;
+    t.range = range;
+    for (const auto& p : table)
+      for (double area : {1.0, 2.0, 10.0, 25.0, 50.0, 100.0}) {
+        PatternOptions o = small();
+        o.level_nits = p.nits, o.area_percent = area;
+        auto f = make_pattern("window", t, o, false);
+        ASSERT_TRUE(f) << f.error().message;
+        const int want = range == Range::full ? p.full : p.narrow;
+        for (int c : read_pixel(*f, 160, 90).code)
+          EXPECT_LE(std::abs(c - want), 1) << p.nits << " cd/m2, " << to_string(range) << ", " << area << " %";
+      }
+  }
+}
+
 TEST(Window, Bt2408ReferenceWhiteIsCode594) {
   PatternOptions o = small();
   o.level_nits = 203;
