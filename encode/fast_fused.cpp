@@ -9,6 +9,7 @@
 
 #include "encode/fast_fused.hpp"
 #include "encode/float_lut.hpp"
+#include "encode/float_poly.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace hdrd::kernels {
@@ -34,6 +35,45 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
   const VF a = hn::GatherIndex(df, l.table, idx);
   const VF b = hn::GatherIndex(df, l.table + 1, idx);
   return hn::MulAdd(hn::Sub(b, a), frac, a);
+}
+
+#undef HDRD_FUSED_POLY  // this file is included once per target
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+#define HDRD_FUSED_POLY 1
+// FloatBitsPoly::operator() for a vector. The coefficients of 32 octaves come from one
+// two-register permute each (vpermt2ps); lanes in the lower 32 slots (tiny values) take
+// a second set only when a vector has any.
+HWY_INLINE VF poly(DF df, const PolyView& p, VF v) {
+  const DU du;
+  const DI di;
+  constexpr int kSlots = FloatBitsPoly::kSlots, kDeg = FloatBitsPoly::kDegree;
+  v = hn::Min(hn::Max(v, hn::Set(df, p.lo)), hn::Set(df, p.hi_prev));
+  const auto rel = hn::Sub(hn::BitCast(du, v), hn::Set(du, p.base_bits));
+  const auto slot = hn::Add(hn::BitCast(di, hn::ShiftRight<23>(rel)), hn::Set(di, kSlots - p.segments));
+  const VF u = hn::MulAdd(hn::ConvertTo(df, hn::BitCast(di, hn::And(rel, hn::Set(du, 0x7FFFFFu)))),
+                          hn::Set(df, 1.0f / 8388608.0f), hn::Set(df, -0.5f));
+  const auto horner = [&](int half) {
+    const auto coef = [&](int k) {
+      const float* c = p.coef + k * kSlots + half * 32;
+      return VF{_mm512_permutex2var_ps(_mm512_loadu_ps(c), slot.raw, _mm512_loadu_ps(c + 16))};
+    };
+    VF acc = coef(kDeg);
+    for (int k = kDeg - 1; k >= 0; --k) acc = hn::MulAdd(acc, u, coef(k));
+    return acc;
+  };
+  VF acc = horner(1);
+  const auto low = hn::Lt(slot, hn::Set(di, 32));
+  if (!hn::AllFalse(di, low)) acc = hn::IfThenElse(hn::RebindMask(df, low), horner(0), acc);
+  return acc;
+}
+#endif
+
+// The signal transfer: the polynomial where this target has it and the stage fitted one.
+HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) {
+#if HDRD_FUSED_POLY
+  if (r.signal_poly.coef) return poly(df, r.signal_poly, v);
+#endif
+  return lut(df, r.signal, v);
 }
 
 HWY_INLINE VF sanitize(DF df, VF v) {
@@ -121,6 +161,11 @@ void FusedRowImpl(FusedRow& r) {
       for (int i = 0; i < N; ++i)
         if (okf[i] == 0.0f) r.fallback[r.fallback_count++] = x + i;
     }
+    if (r.ui) {
+      VF ur, ug, ub, keep;
+      hn::LoadInterleaved4(df, r.ui + static_cast<std::size_t>(x) * 4, ur, ug, ub, keep);
+      R = hn::MulAdd(R, keep, ur), G = hn::MulAdd(G, keep, ug), B = hn::MulAdd(B, keep, ub);
+    }
     if (r.out_kind == FusedOut::scrgb) {
       const hn::Rebind<std::uint16_t, DF> du16;
       const hn::Rebind<hwy::float16_t, DF> dh;
@@ -137,9 +182,9 @@ void FusedRowImpl(FusedRow& r) {
     }
     // Signal -> codes (full: round(E' (2^n - 1)); narrow: round((219 E' + 16) 2^(n-8))).
     const VF one = hn::Set(df, 1.0f), zero = hn::Zero(df);
-    const VF er = hn::Min(hn::Max(lut(df, r.signal, R), zero), one);
-    const VF eg = hn::Min(hn::Max(lut(df, r.signal, G), zero), one);
-    const VF eb = hn::Min(hn::Max(lut(df, r.signal, B), zero), one);
+    const VF er = hn::Min(hn::Max(signal(df, r, R), zero), one);
+    const VF eg = hn::Min(hn::Max(signal(df, r, G), zero), one);
+    const VF eb = hn::Min(hn::Max(signal(df, r, B), zero), one);
     const auto cr = hn::Min(hn::ConvertTo(di, hn::MulAdd(er, scale, bias)), max_code);
     const auto cg = hn::Min(hn::ConvertTo(di, hn::MulAdd(eg, scale, bias)), max_code);
     const auto cb = hn::Min(hn::ConvertTo(di, hn::MulAdd(eb, scale, bias)), max_code);

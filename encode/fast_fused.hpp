@@ -17,6 +17,14 @@ struct LutView {
   float hi_prev = 0;  // the largest float below hi
 };
 
+// FloatBitsPoly for the kernel (null coef: not available, use the LutView).
+struct PolyView {
+  const float* coef = nullptr;  // FloatBitsPoly::coefficients()
+  std::uint32_t base_bits = 0;
+  float lo = 0, hi_prev = 0;
+  int segments = 0;
+};
+
 enum class FusedTone : int { clip = 0, ratio_max = 1, ratio_luminance = 2, per_channel = 3 };
 enum class FusedOut : int { packed10 = 0, xrgb8 = 1, scrgb = 2 };
 
@@ -31,8 +39,12 @@ struct FusedRow {
   LutView tone_lut;
   const float* m_container = nullptr;  // null: container = working (Rec.2020)
   float gamut_lo = 0, gamut_hi = 0;    // accepted container range (tolerances included)
+  // UI blended in linear container light after the gamut check (not for scRGB): n x
+  // (premultiplied nits r, g, b, fraction of the frame kept), or null.
+  const float* ui = nullptr;
   FusedOut out_kind = FusedOut::packed10;
   LutView signal;
+  PolyView signal_poly;  // the same function as a polynomial: used where lane permutes beat gathers
   float code_scale = 1023, code_offset = 0;
   int max_code = 1023;
   bool narrow = false;

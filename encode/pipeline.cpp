@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <bit>
 #include <limits>
 #include <mutex>
@@ -121,29 +122,40 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
     s.code_offset = 0;
   }
   const double peak = t.peak_nits;
+  std::function<double(double)> f;
+  int min_exp2 = -20, max_exp2 = 14;
   switch (t.mode) {
     case Mode::hdr10:
       // Down to 2^-30 cd/m2, where PQ rounds to 0 even as a 16-bit PNG sample.
-      s.signal = FloatBitsLut([](double n) { return transfer::pq_inverse_eotf(n); }, -30, 14);
+      f = [](double n) { return transfer::pq_inverse_eotf(n); };
+      min_exp2 = -30;
       break;
     case Mode::sdr:
       if (t.sdr_curve == SdrCurve::srgb)
-        s.signal = FloatBitsLut([=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); }, -20, 14);
+        f = [=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); };
       else
-        s.signal = FloatBitsLut([=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); }, -20, 14);
+        f = [=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); };
       break;
     case Mode::sdr_bt1886: {
       const auto b = transfer::Bt1886::from_levels(peak, t.black_nits);
-      s.signal = FloatBitsLut([=](double n) { return b.inverse_eotf(n); }, -20, 14);
+      f = [=](double n) { return b.inverse_eotf(n); };
       break;
     }
     case Mode::hlg:
       s.hlg_peak = static_cast<float>(peak);
       s.hlg_gamma = static_cast<float>(transfer::hlg_system_gamma(peak));
-      s.signal = FloatBitsLut([](double e) { return transfer::hlg_oetf(std::min(e, 1.0)); }, -30, 1);
+      f = [](double e) { return transfer::hlg_oetf(std::min(e, 1.0)); };
+      min_exp2 = -30, max_exp2 = 1;
       break;
     case Mode::scrgb:
       break;
+  }
+  if (f) {
+    s.signal = FloatBitsLut(f, min_exp2, max_exp2);
+    // Smooth transfers (PQ) also as polynomials: kinks (clip at the peak, piecewise
+    // curves) do not fit and keep the table only.
+    FloatBitsPoly poly(f, min_exp2, max_exp2);
+    if (poly.max_error() <= kSignalPolyTolerance) s.signal_poly = poly;
   }
   if (t.mode == Mode::hdr10 || t.mode == Mode::hlg) {
     s.code_to_nits.resize(static_cast<std::size_t>(s.max_code) + 1);
