@@ -7,12 +7,15 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <thread>
 #include <vector>
 
 #include "encode/fast_fused.hpp"
 #include "encode/fast_kernels.hpp"
+#include "encode/float_lut.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/pipeline_internal.hpp"
 #include "encode/transfer.hpp"
@@ -35,50 +38,84 @@ struct Mat3f {
   }
 };
 
-// The UI overlay converted once per frame: premultiplied linear container nits + alpha,
-// or (for sRGB-space blending) straight sRGB-encoded values + alpha.
+// The UI overlay converted for blending: premultiplied linear container nits + alpha, or
+// (for sRGB-space blending) straight sRGB-encoded values + alpha. The conversion is kept
+// for the next frame (a real-time loop composites the same overlay every frame).
 struct PreparedUi {
-  std::vector<float> px;
+  std::shared_ptr<const std::vector<float>> pixels;
+  const float* px = nullptr;  // pixels->data()
   int w = 0, h = 0, x0 = 0, y0 = 0;
   float scale = 1, dim = 0, white = 203;
   bool srgb_blend = false;
   bool active() const { return w > 0; }
 };
 
+std::vector<float> convert_overlay(const OverlayImage& o, const color::Primaries& container, double ui_white,
+                                   bool srgb_blend) {
+  const Mat3f to_c(color::rgb_to_rgb(color::kRec709, container));
+  // sRGB EOTF from a table (UI values are mostly 8-bit levels; 1e-8 off the function).
+  static const FloatBitsLut srgb([](double v) { return transfer::srgb_eotf(v); }, -24, 1);
+  std::vector<float> px(o.rgba.size());
+  const std::size_t n = static_cast<std::size_t>(o.width) * o.height;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* q = &o.rgba[i * 4];
+    const float a = std::clamp(q[3], 0.0f, 1.0f);
+    float enc[3] = {q[0], q[1], q[2]};
+    if (o.premultiplied)
+      for (float& c : enc) c = a > 0 ? c / a : 0.0f;
+    float* out = &px[i * 4];
+    if (srgb_blend) {
+      std::copy_n(enc, 3, out);
+    } else {
+      float lin[3];
+      for (int c = 0; c < 3; ++c) lin[c] = enc[c] > 0 ? srgb(enc[c]) : 0.0f;
+      const float k = static_cast<float>(ui_white) * a;
+      for (int c = 0; c < 3; ++c)
+        out[c] = (to_c.m[c * 3] * lin[0] + to_c.m[c * 3 + 1] * lin[1] + to_c.m[c * 3 + 2] * lin[2]) * k;
+    }
+    out[3] = a;
+  }
+  return px;
+}
+
+std::shared_ptr<const std::vector<float>> converted_overlay(const std::shared_ptr<const OverlayImage>& o,
+                                                            const color::Primaries& container, double ui_white,
+                                                            bool srgb_blend) {
+  struct Entry {
+    std::weak_ptr<const OverlayImage> overlay;
+    color::Primaries container;
+    double ui_white;
+    bool srgb_blend;
+    std::shared_ptr<const std::vector<float>> pixels;
+  };
+  static std::mutex mu;
+  static std::optional<Entry> last;
+  {
+    std::lock_guard lock(mu);
+    if (last && last->overlay.lock() == o && last->container == container && last->ui_white == ui_white &&
+        last->srgb_blend == srgb_blend)
+      return last->pixels;
+  }
+  auto px = std::make_shared<const std::vector<float>>(convert_overlay(*o, container, ui_white, srgb_blend));
+  std::lock_guard lock(mu);
+  last = Entry{o, container, ui_white, srgb_blend, px};
+  return px;
+}
+
 PreparedUi prepare_ui(const PreparedPipeline& p) {
   PreparedUi ui;
   const auto& s = p.settings.ui;
   if (!s.overlay) return ui;
-  const auto& o = *s.overlay;
-  ui.w = o.width;
-  ui.h = o.height;
+  ui.w = s.overlay->width;
+  ui.h = s.overlay->height;
   ui.x0 = s.x;
   ui.y0 = s.y;
   ui.scale = static_cast<float>(s.scale);
   ui.dim = static_cast<float>(s.dim);
   ui.white = static_cast<float>(p.settings.target.ui_white_nits);
   ui.srgb_blend = s.srgb_blend;
-  const Mat3 to_c = color::rgb_to_rgb(color::kRec709, p.settings.target.container());
-  ui.px.resize(o.rgba.size());
-  const std::size_t n = static_cast<std::size_t>(o.width) * o.height;
-  for (std::size_t i = 0; i < n; ++i) {
-    const float* q = &o.rgba[i * 4];
-    const double a = std::clamp<double>(q[3], 0.0, 1.0);
-    Vec3 enc{q[0], q[1], q[2]};
-    if (o.premultiplied) enc = a > 0 ? enc * (1.0 / a) : Vec3{};
-    if (ui.srgb_blend) {
-      ui.px[i * 4 + 0] = static_cast<float>(enc.x);
-      ui.px[i * 4 + 1] = static_cast<float>(enc.y);
-      ui.px[i * 4 + 2] = static_cast<float>(enc.z);
-    } else {
-      const Vec3 lin{transfer::srgb_eotf(enc.x), transfer::srgb_eotf(enc.y), transfer::srgb_eotf(enc.z)};
-      const Vec3 nits = to_c * lin * (p.settings.target.ui_white_nits * a);
-      ui.px[i * 4 + 0] = static_cast<float>(nits.x);
-      ui.px[i * 4 + 1] = static_cast<float>(nits.y);
-      ui.px[i * 4 + 2] = static_cast<float>(nits.z);
-    }
-    ui.px[i * 4 + 3] = static_cast<float>(a);
-  }
+  ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend);
+  ui.px = ui.pixels->data();
   return ui;
 }
 
@@ -101,28 +138,50 @@ std::array<float, 4> sample_ui(const PreparedUi& ui, int x, int y) {
   return out;
 }
 
-// REFERENCE.md §1.6: blend over the display-referred frame in linear light (or in sRGB
-// encoding relative to UI white, for UIs authored that way).
+// REFERENCE.md §1.6: blend UI sample s over one display-referred pixel in linear light
+// (or in sRGB encoding relative to UI white, for UIs authored that way).
+void composite_ui_pixel(const PreparedUi& ui, const std::array<float, 4>& s, float* px) {
+  const float a = s[3];
+  if (a <= 0) return;
+  const float keep = (1 - a) * (1 - ui.dim * a);
+  if (!ui.srgb_blend) {
+    for (int c = 0; c < 3; ++c) px[c] = s[c] + px[c] * keep;
+    return;
+  }
+  // s holds alpha-weighted encoded values (bilinear of straight values would bleed).
+  for (int c = 0; c < 3; ++c) {
+    const double bg = transfer::srgb_inverse_eotf(std::clamp(px[c] * (1 - ui.dim * a) / ui.white, 0.0f, 1.0f));
+    const double enc = s[c] + bg * (1 - a);
+    px[c] = static_cast<float>(transfer::srgb_eotf(enc) * ui.white);
+  }
+}
+
 void composite_ui_row(const PreparedUi& ui, int y, int width, float* row) {
   if (y + 0.5f < ui.y0 - ui.scale || y + 0.5f > ui.y0 + (ui.h + 0.5f) * ui.scale) return;
   const int x_begin = std::max(0, static_cast<int>(std::floor(ui.x0 - ui.scale)));
   const int x_end = std::min(width, static_cast<int>(std::ceil(ui.x0 + (ui.w + 1) * ui.scale)));
-  for (int x = x_begin; x < x_end; ++x) {
-    const auto s = sample_ui(ui, x, y);
-    const float a = s[3];
-    if (a <= 0) continue;
-    float* px = row + static_cast<std::size_t>(x) * 4;
-    const float keep = (1 - a) * (1 - ui.dim * a);
-    if (!ui.srgb_blend) {
-      for (int c = 0; c < 3; ++c) px[c] = s[c] + px[c] * keep;
+  for (int x = x_begin; x < x_end; ++x) composite_ui_pixel(ui, sample_ui(ui, x, y), row + static_cast<std::size_t>(x) * 4);
+}
+
+// The linear-light UI of row y over columns [x0, x0 + n) for the fused kernel: premultiplied
+// container nits and what is kept of the frame below, (1 - a)(1 - dim a), per pixel.
+void ui_row_for_kernel(const PreparedUi& ui, int y, int x0, int n, std::vector<float>& out) {
+  out.resize(static_cast<std::size_t>(n) * 4);
+  const bool unscaled = ui.scale == 1.0f;
+  const int sy = y - ui.y0;
+  for (int i = 0; i < n; ++i) {
+    std::array<float, 4> s{};
+    if (unscaled) {
+      const int sx = x0 + i - ui.x0;
+      if (sx >= 0 && sy >= 0 && sx < ui.w && sy < ui.h)
+        std::copy_n(&ui.px[(static_cast<std::size_t>(sy) * ui.w + sx) * 4], 4, s.begin());
     } else {
-      // s holds alpha-weighted encoded values (bilinear of straight values would bleed).
-      for (int c = 0; c < 3; ++c) {
-        const double bg = transfer::srgb_inverse_eotf(std::clamp(px[c] * (1 - ui.dim * a) / ui.white, 0.0f, 1.0f));
-        const double enc = (a > 0 ? s[c] : 0) + bg * (1 - a);
-        px[c] = static_cast<float>(transfer::srgb_eotf(enc) * ui.white);
-      }
+      s = sample_ui(ui, x0 + i, y);
     }
+    const float a = std::max(s[3], 0.0f);
+    float* o = &out[static_cast<std::size_t>(i) * 4];
+    o[0] = a > 0 ? s[0] : 0, o[1] = a > 0 ? s[1] : 0, o[2] = a > 0 ? s[2] : 0;
+    o[3] = (1 - a) * (1 - ui.dim * a);
   }
 }
 
@@ -148,6 +207,7 @@ struct FrameJob {
   EncodedFrame* frame;
   int width = 0;
   std::optional<kernels::FusedRow> fused;  // the fused SIMD kernel's template, when eligible
+  bool fused_ui = false;                   // ... and it composites the UI too (linear blending, not scRGB)
 };
 
 void stage_input(const FrameJob& job, int y, int x0, int n, float* row) {
@@ -303,10 +363,20 @@ bool ui_touches_row(const PreparedUi& ui, int y) {
   return ui.active() && y + 1 > ui.y0 - ui.scale && y < ui.y0 + (ui.h + 1) * ui.scale;
 }
 
-// The fused kernel over pixels [x0, x0 + n) of row y; its tail and out-of-gamut pixels
-// take the exact path.
+// The staged path for single pixels of a fused row (its tail, out-of-gamut pixels), with
+// the UI composited when the row had one.
+void run_staged_pixels(const FrameJob& job, int y, int x, int n, const PreparedUi* ui, float* row,
+                       ContentLightAccumulator& cll) {
+  run_staged(job, y, x, n, row);
+  if (ui)
+    for (int i = 0; i < n; ++i) composite_ui_pixel(*ui, sample_ui(*ui, x + i, y), row + static_cast<std::size_t>(i) * 4);
+  stage_encode(job, y, x, n, row, cll);
+}
+
+// The fused kernel over pixels [x0, x0 + n) of row y, compositing ui_row (from
+// ui_row_for_kernel) when given; its tail and out-of-gamut pixels take the exact path.
 void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& row, std::vector<int>& fallback,
-               ContentLightAccumulator& cll) {
+               ContentLightAccumulator& cll, const float* ui_row = nullptr) {
   if (n <= 0) return;
   kernels::FusedRow fr = *job.fused;
   const std::size_t base = static_cast<std::size_t>(y) * job.width + x0;
@@ -317,17 +387,13 @@ void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& ro
   fr.out = job.frame->data.data() + static_cast<std::size_t>(y) * job.frame->stride_bytes + x0 * bpp;
   fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
   fr.fallback = fallback.data();
+  fr.ui = ui_row;
   kernels::fused_row(fr);
   cll.max_nits = std::max(cll.max_nits, fr.max_nits);
   cll.sum_nits += fr.sum_nits;
-  if (fr.done < n) {
-    run_staged(job, y, x0 + fr.done, n - fr.done, row.data());
-    stage_encode(job, y, x0 + fr.done, n - fr.done, row.data(), cll);
-  }
-  for (int i = 0; i < fr.fallback_count; ++i) {
-    run_staged(job, y, x0 + fallback[i], 1, row.data());
-    stage_encode(job, y, x0 + fallback[i], 1, row.data(), cll);
-  }
+  const PreparedUi* ui = ui_row ? job.ui : nullptr;
+  if (fr.done < n) run_staged_pixels(job, y, x0 + fr.done, n - fr.done, ui, row.data(), cll);
+  for (int i = 0; i < fr.fallback_count; ++i) run_staged_pixels(job, y, x0 + fallback[i], 1, ui, row.data(), cll);
 }
 
 // The columns the UI can touch: [begin, end).
@@ -341,17 +407,21 @@ void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulat
   const int w = job.width;
   std::vector<float> row(static_cast<std::size_t>(w) * 4);
   std::vector<int> fallback(static_cast<std::size_t>(w));
+  std::vector<float> ui_row;
   for (int y = y_begin; y < y_end; ++y) {
     if (job.fused && !ui_touches_row(*job.ui, y)) {
       run_fused(job, y, 0, w, row, fallback, cll);
       continue;
     }
     if (job.fused) {
-      // Only the columns under the UI need linear light before encoding.
+      // Only the columns under the UI need it.
       const auto [x0, x1] = ui_columns(*job.ui, w);
       run_fused(job, y, 0, x0, row, fallback, cll);
       run_fused(job, y, x1, w - x1, row, fallback, cll);
-      if (x1 > x0) {
+      if (x1 > x0 && job.fused_ui) {
+        ui_row_for_kernel(*job.ui, y, x0, x1 - x0, ui_row);
+        run_fused(job, y, x0, x1 - x0, row, fallback, cll, ui_row.data());
+      } else if (x1 > x0) {
         run_staged(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4);
         composite_ui_row(*job.ui, y, w, row.data());
         stage_encode(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4, cll);
@@ -399,6 +469,8 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   r.gamut_hi = detail::gamut_high(t);
   r.out_kind = job.frame->drm_fourcc == kDrmFormatXrgb8888 ? kernels::FusedOut::xrgb8 : kernels::FusedOut::packed10;
   r.signal = view(job.sig->signal);
+  if (const auto& q = job.sig->signal_poly; !q.empty())
+    r.signal_poly = kernels::PolyView{q.coefficients(), q.base_bits(), q.lo(), q.hi_prev(), q.segments()};
   r.code_scale = job.sig->code_scale;
   r.code_offset = job.sig->code_offset;
   r.max_code = job.sig->max_code;
@@ -453,6 +525,7 @@ Result<void> encode_prepared_into(const SceneInput& in, const PreparedPipeline& 
   job.frame = &frame;
   job.width = w;
   job.fused = fused_template(job);
+  job.fused_ui = job.fused && ui.active() && !ui.srgb_blend && job.fused->out_kind != kernels::FusedOut::scrgb;
 
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hw, 1, std::max(1, h));
