@@ -8,6 +8,7 @@
 
 #include "encode/tonemap.hpp"
 #include "encode/transfer.hpp"
+#include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 #include "shading/materials.hpp"
 
@@ -309,25 +310,64 @@ Image luminance_image(const Image& nits, const color::Primaries& primaries) {
   return out;
 }
 
+// Title row (scale-2 text), then the picture; the legend column right of it with its
+// "CD/M2" caption above the bar and decade labels beside it.
+HeatmapLayout heatmap_layout(int image_width, int image_height) {
+  constexpr int kHead = 24, kLegendColumn = 110, kMinHeight = 260;
+  HeatmapLayout l;
+  l.image_x = 0, l.image_y = kHead;
+  l.width = image_width + kLegendColumn;
+  l.height = std::max(image_height + kHead, kMinHeight);
+  l.legend_x = image_width + 10, l.legend_width = 20;
+  l.legend_top = kHead + 20;  // room for the caption, clear of the top label
+  l.legend_bottom = l.height - 12;
+  return l;
+}
+
+int HeatmapLayout::legend_row(double nits) const {
+  const double t = (4 - std::log10(std::clamp(nits, 0.01, 10000.0))) / 6;
+  return legend_top + static_cast<int>(std::lround(t * (legend_bottom - legend_top)));
+}
+
+double HeatmapLayout::legend_nits(int row) const {
+  return std::pow(10.0, 4 - 6.0 * (row - legend_top) / (legend_bottom - legend_top));
+}
+
 Canvas8 heatmap(const Image& lum, const std::string& title) {
-  const int legend = 110, head = 24;
-  Canvas8 c(lum.width + legend, std::max(lum.height + head, 260), {255, 255, 255});
-  c.text(title, 4, 6, {0, 0, 0}, 2);
+  const HeatmapLayout l = heatmap_layout(lum.width, lum.height);
+  const Rgb8 black{0, 0, 0};
+  Canvas8 c(std::max(l.width, text_width(title, 2) + 8), l.height, {255, 255, 255});
+  c.text(title, 4, 5, black, 2);
   for (int y = 0; y < lum.height; ++y)
-    for (int x = 0; x < lum.width; ++x) c.set(x, y + head, heat_colour(lum.px(x, y)[0]));
-  // Legend: a vertical bar from 10000 (top) to 0.01 cd/m2, labelled every decade.
-  const int bx = lum.width + 10, top = head + 10, bottom = c.height - 20;
-  for (int y = top; y <= bottom; ++y) {
-    const double nits = std::pow(10.0, 4 - 6.0 * (y - top) / (bottom - top));
-    c.fill(bx, y, bx + 20, y + 1, heat_colour(nits));
-  }
+    for (int x = 0; x < lum.width; ++x) c.set(l.image_x + x, l.image_y + y, heat_colour(lum.px(x, y)[0]));
+  for (int y = l.legend_top; y <= l.legend_bottom; ++y)
+    c.fill(l.legend_x, y, l.legend_x + l.legend_width, y + 1, heat_colour(l.legend_nits(y)));
+  const int tick_x = l.legend_x + l.legend_width;
   for (int d = -2; d <= 4; ++d) {
-    const int y = top + (4 - d) * (bottom - top) / 6;
-    c.line(bx + 20, y, bx + 25, y, {0, 0, 0});
-    c.text(fmt::format("{:g}", std::pow(10.0, d)), bx + 28, y - 3, {0, 0, 0});
+    const int y = l.legend_row(std::pow(10.0, d));
+    c.line(tick_x, y, tick_x + 4, y, black);
+    c.text(fmt::format("{:g}", std::pow(10.0, d)), tick_x + 7, y - 3, black);
   }
-  c.text("CD/M2", bx, top - 10 < head ? head : top - 10, {0, 0, 0});
+  c.text("CD/M2", l.legend_x, l.legend_top - 16, black);
   return c;
+}
+
+Image decoded_luminance(const EncodedFrame& f) {
+  const color::Vec3 w = color::luminance_weights(f.target.container());
+  Image out(f.width, f.height);
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const color::Vec3 n = decode_pixel(f, x, y);
+      float* p = out.px(x, y);
+      p[0] = p[1] = p[2] = static_cast<float>(w.x * n.x + w.y * n.y + w.z * n.z);
+      p[3] = 1;
+    }
+  return out;
+}
+
+Canvas8 frame_heatmap(const EncodedFrame& f) {
+  return heatmap(decoded_luminance(f),
+                 fmt::format("DISPLAY CD/M2, {} PEAK {:g}", to_string(f.target.mode), f.target.peak_nits));
 }
 
 // ---- Contact sheet -----------------------------------------------------------------------

@@ -64,8 +64,29 @@ double fresnel_conductor(double cos_theta, double n, double k);
 Rgb8 heat_colour(double nits);
 Canvas8 heatmap(const Image& luminance_nits_rgba, const std::string& title);
 
+// Where heatmap() puts the picture and its legend for a luminance image of the given size:
+// the picture at the top left under the title, the legend bar (10000 cd/m2 at the top to
+// 0.01 cd/m2 at the bottom, labelled every decade) to its right.
+struct HeatmapLayout {
+  int image_x = 0, image_y = 0;
+  int legend_x = 0, legend_width = 0;
+  int legend_top = 0, legend_bottom = 0;  // the rows of 10000 and 0.01 cd/m2
+  int width = 0, height = 0;              // the canvas, before widening for a long title
+  int legend_row(double nits) const;      // the bar row that shows `nits`
+  double legend_nits(int row) const;      // the luminance the bar shows at `row`
+};
+HeatmapLayout heatmap_layout(int image_width, int image_height);
+
 // Luminance (cd/m2) of display light in the given primaries, into R=G=B of a new image.
 Image luminance_image(const Image& display_nits, const color::Primaries& primaries);
+
+// The luminance a display shows for each pixel, decoded from the frame's own codes
+// (patterns/decode.hpp: the mode's EOTF, in the container primaries): what the encode
+// produced after quantisation, whichever path (CPU or GPU) made the frame.
+Image decoded_luminance(const EncodedFrame& frame);
+
+// The heatmap of an encoded frame: decoded_luminance() under a title naming the mode and peak.
+Canvas8 frame_heatmap(const EncodedFrame& frame);
 
 struct SheetTile {
   std::string label;

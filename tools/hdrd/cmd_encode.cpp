@@ -27,6 +27,7 @@ void run(const EncodeOptions& o) {
   // Defaults for EXR input: manual exposure, 0 EV (REFERENCE.md §1.2).
   EncodeSettings settings = build_settings(o.pipeline, exposure::Mode::manual, &notes);
   const auto formats = build_formats(o.pipeline, settings.target.mode);
+  const DebugOutputs debug = parse_debug(o.pipeline);
   auto wants = [&](io::DumpFormat f) { return std::find(formats.begin(), formats.end(), f) != formats.end(); };
   settings.keep_display_nits = wants(io::DumpFormat::exr);
   settings.png_samples = wants(io::DumpFormat::png);
@@ -67,6 +68,7 @@ void run(const EncodeOptions& o) {
   t0 = std::chrono::steady_clock::now();
   auto dumps = io::write_dumps(*frame, o.outbase, formats);
   if (!dumps) throw HdrdError(dumps.error());
+  write_debug_outputs(*frame, o.outbase, debug, *dumps);
   progress("wrote {} files in {:.0f} ms", dumps->files.size(), ms_since(t0));
   print_out(summary_text(*frame, *dumps, o.common.json, notes));
 }
@@ -80,10 +82,12 @@ void setup(CLI::App& root) {
       ->required();
   app->add_option("--input", o->input_units, "relative or absolute (default: absolute when the file has whiteLuminance)");
   add_pipeline_options(*app, o->pipeline);
+  add_debug_option(*app, o->pipeline);
   add_common_options(*app, o->common);
   app->footer(
       "Examples:\n"
       "  hdrd encode Desk.exr -o out/desk --mode hdr10 --peak 1000\n"
+      "  hdrd encode Desk.exr -o out/desk --mode hdr10 --debug heatmap   (+ out/desk.heatmap.png)\n"
       "  hdrd encode Desk.exr -o out/desk-sdr --mode sdr --tonemap aces-narkowicz --exposure -1\n"
       "  hdrd encode frame.exr -o out/f --mode hdr10 --tonemap clip --format png --json\n"
       "  hdrd encode Desk.exr -o out/d --mode hlg --exposure-mode histogram --ui hud.png --ui-pos 16,16\n"

@@ -54,7 +54,6 @@ void run_heatmap(const PlotOptions& o) {
   if (o.output.empty()) throw CliError("-o OUTPUT.png is required");
   std::vector<std::string> notes;
   EncodeSettings settings = build_settings(o.pipeline, exposure::Mode::manual, &notes);
-  settings.keep_display_nits = true;
   auto exr = io::read_exr(o.input);
   if (!exr) throw HdrdError(exr.error());
   const Image small = patterns::downscale(exr->image, o.max_width);
@@ -65,9 +64,8 @@ void run_heatmap(const PlotOptions& o) {
   in.white_luminance_nits = exr->white_luminance.value_or(1.0);
   auto frame = encode_frame(in, settings);
   if (!frame) throw HdrdError(frame.error());
-  const Image lum = patterns::luminance_image(*frame->display_nits, frame->target.container());
-  const auto title = fmt::format("DISPLAY CD/M2, {} PEAK {:g}", to_string(frame->target.mode), frame->target.peak_nits);
-  write_canvas(o.output, patterns::heatmap(lum, title));
+  // The same picture as `--debug heatmap`: display cd/m2 decoded from the encoded codes.
+  write_canvas(o.output, patterns::frame_heatmap(*frame));
   print_out(o.common.json ? nlohmann::json{{"output", o.output}, {"max_cll_nits", frame->content_light.max_cll_nits}}.dump(2)
                           : fmt::format("wrote {}\n", o.output));
 }

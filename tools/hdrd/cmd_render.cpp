@@ -101,6 +101,7 @@ void run(const RenderOptions& o) {
   // Renders are absolute light: automatic (histogram) metering unless told otherwise.
   EncodeSettings settings = build_settings(o.pipeline, exposure::Mode::histogram, &notes);
   const auto formats = build_formats(o.pipeline, settings.target.mode);
+  const DebugOutputs debug = parse_debug(o.pipeline);
   auto wants = [&](io::DumpFormat f) { return std::find(formats.begin(), formats.end(), f) != formats.end(); };
   settings.keep_display_nits = wants(io::DumpFormat::exr);
   settings.png_samples = wants(io::DumpFormat::png);
@@ -154,6 +155,7 @@ void run(const RenderOptions& o) {
     std::filesystem::remove(scene_exr, ec);  // all files or none
     throw HdrdError(dumps.error());
   }
+  write_debug_outputs(frame, o.outbase, debug, *dumps);
   if (!o.no_scene_exr) dumps->files["scene_exr"] = scene_exr.string();
   print_out(summary_text(frame, *dumps, o.common.json, notes));
 }
@@ -175,10 +177,12 @@ void setup(CLI::App& root) {
   app->add_option("--encoder", o->encoder, "auto (GPU when it can), gpu or cpu");
   app->add_flag("--no-scene-exr", o->no_scene_exr, "Do not write OUTBASE.scene.exr");
   add_pipeline_options(*app, o->pipeline);
+  add_debug_option(*app, o->pipeline);
   add_common_options(*app, o->common);
   app->footer(
       "Examples:\n"
       "  hdrd render --scene material-grid -o out/grid --mode hdr10 --peak 1000\n"
+      "  hdrd render --scene hdr -o out/hdr --debug heatmap        (+ out/hdr.heatmap.png, display cd/m2)\n"
       "  hdrd render --scene hdr -o out/hdr-sdr --mode sdr --tonemap aces-narkowicz --format png\n"
       "  hdrd render --scene model.glb -o out/model --width 1280 --height 720 --camera 0,1.5,4:0,0.5,0:40\n"
       "  hdrd render --scene furnace -o out/f --exposure-mode light --backend osmesa --json\n"

@@ -1,6 +1,9 @@
 #include "tools/hdrd/pipeline_options.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <map>
+#include <span>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -10,6 +13,7 @@
 #include "display/profile.hpp"
 #include "encode/grade.hpp"
 #include "encode/result.hpp"
+#include "patterns/plot.hpp"
 #include "tools/hdrd/command.hpp"
 
 namespace hdrd::cli {
@@ -220,6 +224,42 @@ EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_e
   if (notes && sdr && o.paper_white_nits && *o.paper_white_nits != t.peak_nits)
     notes->push_back(fmt::format("SDR paper white {} cd/m2 differs from the peak {} cd/m2", t.paper_white_nits, t.peak_nits));
   return s;
+}
+
+void add_debug_option(CLI::App& app, PipelineOptions& o) {
+  app.add_option("--debug", o.debug,
+                 "Extra outputs, comma-separated: heatmap (OUTBASE.heatmap.png, false colour of the display "
+                 "cd/m2 decoded from the codes, with a legend)")
+      ->delimiter(',')
+      ->group("Output");
+}
+
+DebugOutputs parse_debug(const PipelineOptions& o) {
+  DebugOutputs d;
+  for (const auto& name : o.debug) {
+    if (name == "heatmap") d.heatmap = true;
+    else fail("--debug", fmt::format("unknown value '{}' (known: heatmap)", name));
+  }
+  return d;
+}
+
+void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, const DebugOutputs& debug,
+                         io::DumpResult& dumps) {
+  if (!debug.heatmap) return;
+  auto png = patterns::frame_heatmap(frame).png();
+  if (!png) throw HdrdError(png.error());
+  const std::filesystem::path path = outbase + ".heatmap.png";
+  if (auto ok = io::atomic_write(path, *png); !ok) throw HdrdError(ok.error());
+  dumps.files["heatmap"] = path.string();
+  // The sidecar names the files relative to its own directory (docs/dump-format.md §5).
+  std::map<std::string, std::string> names;
+  for (const auto& [kind, file] : dumps.files)
+    if (kind != "sidecar") names[kind] = std::filesystem::path(file).filename().string();
+  const std::string sidecar = io::sidecar_json(frame, names).dump(2) + "\n";
+  if (auto ok = io::atomic_write(dumps.files.at("sidecar"),
+                                 std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size()));
+      !ok)
+    throw HdrdError(ok.error());
 }
 
 std::vector<io::DumpFormat> build_formats(const PipelineOptions& o, Mode mode) {

@@ -46,6 +46,7 @@ struct PipelineOptions {
   std::string formats;   // "png,exr,raw"
   bool dither = false;
   int threads = 0;
+  std::vector<std::string> debug;  // --debug heatmap (encode, render)
 };
 
 // Adds the options to a subcommand.
@@ -58,6 +59,19 @@ EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_e
 
 // The dump formats asked for (default: all that apply to the mode).
 std::vector<io::DumpFormat> build_formats(const PipelineOptions& o, Mode mode);
+
+// --debug NAME[,NAME]: extra pictures next to the dumps (docs/patterns.md). Only `hdrd
+// encode` and `hdrd render` take it.
+void add_debug_option(CLI::App& app, PipelineOptions& o);
+struct DebugOutputs {
+  bool heatmap = false;  // OUTBASE.heatmap.png: false colour of the decoded display luminance
+};
+// Checks the --debug values (throws HdrdError naming an unknown one): call before any work.
+DebugOutputs parse_debug(const PipelineOptions& o);
+// Writes the asked-for debug files after io::write_dumps, adds them to `dumps.files` (so
+// --json lists them) and rewrites the sidecar so its `files` lists them too.
+void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, const DebugOutputs& debug,
+                         io::DumpResult& dumps);
 
 // The sidecar-style summary printed by encode/render (--json) and its human form.
 std::string summary_text(const EncodedFrame& f, const io::DumpResult& dumps, bool json,
