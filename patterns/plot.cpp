@@ -199,12 +199,11 @@ Canvas8 render_raster(const Plot& p) {
 
 // ---- Tone curves and Fresnel -------------------------------------------------------------
 namespace {
-Rgb8 palette(std::size_t i) {
-  static constexpr Rgb8 k[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},  {148, 103, 189},
-                               {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207},
-                               {0, 0, 0},      {174, 199, 232}, {255, 187, 120}, {152, 223, 138}, {255, 152, 150}};
-  return k[i % std::size(k)];
-}
+constexpr Rgb8 kPalette[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},  {148, 103, 189},
+                             {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207},
+                             {0, 0, 0},      {174, 199, 232}, {255, 187, 120}, {152, 223, 138}, {255, 152, 150}};
+constexpr std::size_t kPaletteSize = std::size(kPalette);
+Rgb8 palette(std::size_t i) { return kPalette[i % kPaletteSize]; }
 }  // namespace
 
 Plot tone_curves_plot(double peak, double pw, double black) {
@@ -213,15 +212,22 @@ Plot tone_curves_plot(double peak, double pw, double black) {
   p.x_label = "scene value (relative, 1 = diffuse white)";
   p.y_label = "display cd/m2";
   p.log_x = p.log_y = true;
-  p.x_min = 1e-3, p.x_max = 1e3, p.y_min = 0.1, p.y_max = std::pow(10, std::ceil(std::log10(peak * 1.01)));
+  // Down to 0.01 cd/m2 so the curves' toes show; a little headroom above the peak so the
+  // shoulders are not drawn on the frame.
+  p.x_min = 1e-3, p.x_max = 1e3, p.y_min = 0.01, p.y_max = peak * 2;
   p.x_ticks = {1e-3, 1e-2, 0.1, 1, 10, 100, 1000};
-  for (double y = p.y_min; y <= p.y_max * 1.001; y *= 10) p.y_ticks.push_back(y);
+  for (double y = p.y_min; y <= p.y_max; y *= 10)
+    if (y < peak / 1.5) p.y_ticks.push_back(y);
+  p.y_ticks.push_back(pw);
+  p.y_ticks.push_back(peak);
   const tonemap::Display d{peak, black, pw};
   std::size_t i = 0;
   for (const auto& info : tonemap::curves()) {
     auto curve = tonemap::prepare(info.name, d);
     if (!curve) continue;
-    Series s{std::string(info.name), palette(i++), {}};
+    // More curves than distinct colours: the second round of the palette is dashed.
+    Series s{std::string(info.name), palette(i), {}, i >= kPaletteSize};
+    ++i;
     for (int k = 0; k <= 300; ++k) {
       const double x = std::pow(10.0, -3 + 6.0 * k / 300);
       s.points.push_back({x, (*curve)->map(x) * pw});
