@@ -359,16 +359,14 @@ Canvas8 heatmap(const Image& lum, const std::string& title) {
 }
 
 Image decoded_luminance(const EncodedFrame& f) {
-  const color::Vec3 w = color::luminance_weights(f.target.container());
-  Image out(f.width, f.height);
+  Image nits(f.width, f.height);
   for (int y = 0; y < f.height; ++y)
     for (int x = 0; x < f.width; ++x) {
       const color::Vec3 n = decode_pixel(f, x, y);
-      float* p = out.px(x, y);
-      p[0] = p[1] = p[2] = static_cast<float>(w.x * n.x + w.y * n.y + w.z * n.z);
-      p[3] = 1;
+      float* p = nits.px(x, y);
+      p[0] = float(n.x), p[1] = float(n.y), p[2] = float(n.z), p[3] = 1;
     }
-  return out;
+  return luminance_image(nits, f.target.container());
 }
 
 Canvas8 frame_heatmap(const EncodedFrame& f) {
