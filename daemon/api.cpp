@@ -11,13 +11,14 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "daemon/api_support.hpp"
 #include "daemon/output.hpp"
+#include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
 #include "encode/io.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tonemap.hpp"
 
-#include "daemon/render_worker.hpp"
 #if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
 #include "display/displays.hpp"
 #define HDRD_HAVE_DISPLAYS 1
@@ -48,6 +49,8 @@ const std::vector<Service::Route>& Service::routes() {
       {"GET", "/metrics", &Service::get_metrics, BodyKind::none},
       {"POST", "/v1/render", &Service::post_render, BodyKind::json},
       {"POST", "/v1/encode", &Service::post_encode, BodyKind::upload},
+      {"POST", "/v1/pattern", &Service::post_pattern, BodyKind::json},
+      {"POST", "/v1/selftest", &Service::post_selftest, BodyKind::json},
   };
   return kRoutes;
 }
@@ -55,14 +58,6 @@ const std::vector<Service::Route>& Service::routes() {
 namespace {
 
 constexpr std::size_t kNoBodyLimit = 4096;  // GET requests: a stray body is tolerated, not stored beyond this
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-Reply json_reply(const json& j) {
-  return Reply::json(200, j.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
-}
 
 // Constant-time comparison, so the bearer token cannot be guessed byte by byte.
 bool same_secret(std::string_view a, std::string_view b) {
@@ -76,17 +71,9 @@ std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 1469598103934665603ull
   return h;
 }
 
-std::string media_type(const HttpRequest& r) {
-  const std::string* ct = r.header("content-type");
-  if (!ct) return {};
-  std::string t = ct->substr(0, ct->find(';'));
-  t.erase(std::remove_if(t.begin(), t.end(), [](unsigned char c) { return std::isspace(c); }), t.end());
-  std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return t;
-}
-
 std::string endpoint_label(const HttpRequest& r) {
-  for (auto p : {"/v1/status", "/v1/capabilities", "/v1/displays", "/metrics", "/v1/render", "/v1/encode"})
+  for (auto p : {"/v1/status", "/v1/capabilities", "/v1/displays", "/metrics", "/v1/render", "/v1/encode",
+                 "/v1/pattern", "/v1/selftest"})
     if (r.path == p) return p;
   return "other";
 }
@@ -116,18 +103,6 @@ int encode_threads_per_job(const Config& c) {
   return std::max(1, hw / std::max(1, c.workers.encode_threads));
 }
 
-std::string generated_name(std::string_view prefix, std::uint64_t id) {
-  const auto now = std::chrono::system_clock::now().time_since_epoch();
-  return fmt::format("{}-{}-{}-{}", prefix, std::chrono::duration_cast<std::chrono::milliseconds>(now).count(),
-                     ::getpid(), id);
-}
-
-// The coalescing key: the canonical request (strings from query parameters may hold
-// invalid UTF-8; they are replaced rather than thrown over).
-std::string canonical_key(const Request& r) {
-  return r.canonical().dump(-1, ' ', false, json::error_handler_t::replace);
-}
-
 // Encodes a scene-referred input and answers in the negotiated form.
 Reply encode_and_reply(const SceneInput& in, const Request& req, OutputKind output, const std::string& dump_name,
                        const Config& cfg, exposure::Mode default_exposure, std::vector<std::string> warnings,
@@ -137,18 +112,14 @@ Reply encode_and_reply(const SceneInput& in, const Request& req, OutputKind outp
   if (!target) return Reply::error(target.error());
   auto settings = build_encode_settings(req, *target, default_exposure, encode_threads_per_job(cfg), &warnings);
   if (!settings) return Reply::error(settings.error());
-  const bool wants_exr = output == OutputKind::exr ||
-                         (req.dump && (req.formats.empty() ||
-                                       std::find(req.formats.begin(), req.formats.end(), "exr") != req.formats.end()));
-  settings->keep_display_nits = wants_exr;
+  settings->keep_display_nits = needs_display_nits(req, output);
   auto frame = encode_frame(in, *settings);
   if (!frame) return Reply::error(frame.error());
   for (auto& [k, v] : extra_settings.items()) frame->settings[k] = v;
   const double encode_s = seconds_since(t0);
   metrics.stage_time("encode", encode_s);
   const auto t1 = std::chrono::steady_clock::now();
-  auto reply = req.dump ? dump_reply(*frame, cfg.paths.dump_dir, dump_name, req.formats, warnings)
-                        : frame_reply(*frame, output, warnings);
+  auto reply = answer_frame(*frame, req, output, cfg.paths.dump_dir, dump_name, warnings);
   if (!reply) return Reply::error(reply.error());
   metrics.stage_time("serialize", seconds_since(t1));
   reply->headers.emplace_back("X-Hdrd-Encode-Ms", fmt::format("{:.1f}", encode_s * 1e3));
@@ -472,6 +443,8 @@ void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responde
         {"max_json_depth", l.max_json_depth}, {"max_request_seconds", l.max_request_seconds}}},
       {"asset_root", !cfg->paths.asset_root.empty()},
       {"dump", !cfg->paths.dump_dir.empty()},
+      {"patterns", pattern_capabilities()},
+      {"selftest_modes", {"sdr-srgb", "sdr", "sdr-bt1886", "hdr10", "scrgb", "hlg"}},
   };
   responder->reply(json_reply(j));
 }
@@ -513,17 +486,7 @@ void Service::get_metrics(HttpRequest&, std::shared_ptr<Responder> responder) {
 
 void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responder) {
   const auto cfg = config();
-  const std::string mt = media_type(http);
-  if (!mt.empty() && mt != "application/json" && mt != "application/x-www-form-urlencoded" && mt != "text/json") {
-    responder->reply(Reply::error(make_error("request.media_type",
-                                             "POST /v1/render takes a JSON body (Content-Type: application/json)")));
-    return;
-  }
-  if (!http.query.empty()) {
-    responder->reply(Reply::error(make_error("request.unknown_field", "POST /v1/render takes no query parameters; "
-                                             "put every option in the JSON body", http.query[0].first.substr(0, 64))));
-    return;
-  }
+  if (auto bad = check_json_post(http)) return responder->reply(Reply::error(*bad));
   ParseContext ctx{Endpoint::render, cfg->limits, cfg->render, cfg->paths.asset_root};
   auto req = parse_request(http.body, ctx);
   if (!req) return responder->reply(Reply::error(req.error()));
@@ -544,11 +507,9 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
   st->output = *output;
   st->config = cfg;
   st->dump_name = st->request.name.empty() ? generated_name("render", http.id) : st->request.name;
-  const double limit_s = std::min(st->request.timeout_s.value_or(cfg->limits.max_request_seconds),
-                                  cfg->limits.max_request_seconds);
   JobSpec spec;
-  spec.deadline = http.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
-  if (!st->request.dump) spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output));
+  spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
+  if (!st->request.dump) spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output));
   Metrics* metrics = &metrics_;
   spec.render = [st, metrics](RenderResource* res, const JobControl&) { return render_stage(*st, res, *metrics); };
   spec.finish = [st, metrics](const JobControl&) { return render_finish(*st, *metrics); };
@@ -612,12 +573,10 @@ void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responde
   st->config = cfg;
   st->exr = std::move(exr);
   st->dump_name = st->request.name.empty() ? generated_name("encode", http.id) : st->request.name;
-  const double limit_s = std::min(st->request.timeout_s.value_or(cfg->limits.max_request_seconds),
-                                  cfg->limits.max_request_seconds);
   JobSpec spec;
-  spec.deadline = http.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
+  spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
   if (!st->request.dump)
-    spec.key = canonical_key(st->request) + "|" + std::string(content_type(*output)) +
+    spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output)) +
                fmt::format("|exr:{}:{:016x}", st->exr.size(), fnv1a(st->exr));
   Metrics* metrics = &metrics_;
   spec.finish = [st, metrics](const JobControl& control) { return encode_finish(*st, control, *metrics); };

@@ -197,4 +197,17 @@ Result<Reply> dump_reply(const EncodedFrame& frame, const std::filesystem::path&
   return r;
 }
 
+bool needs_display_nits(const Request& request, OutputKind kind) {
+  if (kind == OutputKind::exr) return true;
+  const auto& f = request.formats;
+  return request.dump && (f.empty() || std::find(f.begin(), f.end(), "exr") != f.end());
+}
+
+Result<Reply> answer_frame(const EncodedFrame& frame, const Request& request, OutputKind kind,
+                           const std::filesystem::path& dump_dir, const std::string& dump_name,
+                           const std::vector<std::string>& warnings) {
+  return request.dump ? dump_reply(frame, dump_dir, dump_name, request.formats, warnings)
+                      : frame_reply(frame, kind, warnings);
+}
+
 }  // namespace hdrd::daemon

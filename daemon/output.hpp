@@ -38,6 +38,15 @@ Result<Reply> frame_reply(const EncodedFrame& frame, OutputKind kind, const std:
 Result<Reply> dump_reply(const EncodedFrame& frame, const std::filesystem::path& dump_dir, const std::string& name,
                          const std::vector<std::string>& formats, const std::vector<std::string>& warnings);
 
+// Whether the answer needs the frame's display light (an EXR reply, or a dump with EXR).
+bool needs_display_nits(const Request& request, OutputKind kind);
+
+// The answer for an encoded frame: with "dump": true the dump's sidecar (dump_reply),
+// else the frame in the negotiated format (frame_reply).
+Result<Reply> answer_frame(const EncodedFrame& frame, const Request& request, OutputKind kind,
+                           const std::filesystem::path& dump_dir, const std::string& dump_name,
+                           const std::vector<std::string>& warnings);
+
 // X-Hdrd-* headers describing a frame (mode, fourcc, size, stride, levels, MaxCLL/MaxFALL).
 std::vector<std::pair<std::string, std::string>> frame_headers(const EncodedFrame& frame);
 

@@ -1,5 +1,6 @@
 #include "daemon/request.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -7,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "daemon/paths.hpp"
+#include "daemon/pattern_catalogue.hpp"
 #include "encode/tonemap.hpp"
 
 namespace hdrd::daemon {
@@ -366,7 +368,6 @@ void parse_ui(Fields& top, Request& r, const ParseContext& ctx) {
 
 void parse_output(Fields& top, Request& r) {
   r.dump = top.boolean("dump").value_or(false);
-  r.dither = top.boolean("dither").value_or(false);
   if (const auto name = top.string("name", 256)) {
     if (auto v = validate_dump_name(*name); !v) throw Fail{v.error()};
     r.name = *name;
@@ -388,22 +389,86 @@ void parse_output(Fields& top, Request& r) {
   }
 }
 
-Request parse_fields(const json& body, const ParseContext& ctx) {
-  Request r;
-  r.endpoint = ctx.endpoint;
-  Fields top(body, "");
-  if (ctx.endpoint == Endpoint::render) {
-    parse_scene(top, r, ctx);
-    parse_camera(top, r);
-    parse_size(top, r, ctx);
-  } else {
-    if (const auto in = top.string("input", 16)) {
-      if (*in != "relative" && *in != "absolute")
-        fail("request.value", "input: one of relative, absolute", "input");
-      r.input = *in;
-    }
+// ---- POST /v1/pattern --------------------------------------------------------------------
+
+// Reads one parameter under "params" with its catalogue type and range.
+void parse_pattern_param(Fields& pf, const PatternParam& p, PatternSpec& spec) {
+  if (p.type == PatternParam::Type::boolean) {
+    spec.labels = *pf.boolean(p.name);
+    return;
   }
-  parse_display(top, r, ctx);
+  const double v = p.type == PatternParam::Type::integer ? double(*pf.integer(p.name, std::int64_t(p.min), std::int64_t(p.max)))
+                                                         : *pf.number(p.name, p.min, p.max);
+  if (p.name == "level_nits") spec.level_nits = v;
+  else if (p.name == "area_percent") spec.area_percent = v;
+  else if (p.name == "steps") spec.steps = int(v);
+}
+
+void parse_pattern_params(Fields& top, const PatternEntry& entry, PatternSpec& spec) {
+  const json* p = top.get("params");
+  if (!p) return;
+  Fields pf(*p, "params");
+  for (auto it = p->begin(); it != p->end(); ++it) {
+    const PatternParam* param = find_param(entry, it.key());
+    if (!param) {
+      const std::string f = pf.field(it.key().substr(0, 64));
+      fail("request.unknown_field", fmt::format("{}: not a parameter of pattern {} (its parameters: {})", f,
+                                                entry.name, param_names(entry)), f);
+    }
+    parse_pattern_param(pf, *param, spec);
+  }
+  pf.finish();
+}
+
+// Patterns are 1920x1080 layouts by default (the BT.2111 one is defined at that size),
+// smaller when the configured limits are.
+void parse_pattern_size(Fields& top, Request& r, const ParseContext& ctx) {
+  const auto& lim = ctx.limits;
+  r.width = int(top.integer("width", 1, lim.max_width, "request.limit").value_or(std::min(1920, lim.max_width)));
+  r.height = int(top.integer("height", 1, lim.max_height, "request.limit").value_or(std::min(1080, lim.max_height)));
+  if (std::int64_t(r.width) * r.height > lim.max_pixels)
+    fail("request.limit", fmt::format("width x height: {} pixels, at most {}", std::int64_t(r.width) * r.height,
+                                      lim.max_pixels),
+         "width");
+}
+
+void parse_pattern(Fields& top, Request& r, const ParseContext& ctx) {
+  const auto name = top.string("pattern", 64);
+  if (!name) fail("request.value", fmt::format("pattern: required (one of: {})", pattern_names()), "pattern");
+  const PatternEntry* entry = find_pattern_entry(*name);
+  if (!entry)
+    fail("request.value", fmt::format("pattern: unknown pattern '{}' (one of: {})", *name, pattern_names()), "pattern");
+  r.pattern.name = *name;
+  parse_pattern_params(top, *entry, r.pattern);
+  parse_pattern_size(top, r, ctx);
+}
+
+// A pattern's mode restriction, checked once the display is known (not for "auto" or an
+// EDID, whose mode is only known when the display is read: the handler checks those).
+void check_pattern_mode(const Request& r) {
+  const PatternEntry* entry = find_pattern_entry(r.pattern.name);
+  if (entry->modes.empty() || r.display.auto_detect || !r.display.edid_path.empty()) return;
+  const Mode mode = r.display.target.mode;
+  if (std::find(entry->modes.begin(), entry->modes.end(), mode) != entry->modes.end()) return;
+  std::string modes;
+  for (Mode m : entry->modes) modes += (modes.empty() ? "" : ", ") + std::string(to_string(m));
+  fail("request.value", fmt::format("display.mode: pattern {} exists for {} only, not {}", entry->name, modes,
+                                    to_string(mode)),
+       "display.mode");
+}
+
+// Patterns are display light encoded with the clip curve: scene-referred options would
+// be ignored, so they are refused by name rather than as anonymous unknown fields.
+void refuse_scene_options(const Fields& top) {
+  for (const char* k : {"tone", "exposure", "exposure_comp_ev", "gamut", "grade", "ui", "dither"})
+    if (top.has(k))
+      fail("request.unknown_field", fmt::format("{}: does not apply to patterns (they are display light, encoded "
+                                                "with the clip curve)", k), k);
+}
+
+// ---- the request as a whole ----------------------------------------------------------------
+
+void parse_scene_referred(Fields& top, Request& r, const ParseContext& ctx) {
   parse_tone(top, r);
   parse_exposure(top, r);
   if (const auto g = top.string("gamut", 16)) {
@@ -412,7 +477,56 @@ Request parse_fields(const json& body, const ParseContext& ctx) {
   }
   parse_grade(top, r, ctx);
   parse_ui(top, r, ctx);
+  r.dither = top.boolean("dither").value_or(false);
+}
+
+void parse_input_units(Fields& top, Request& r) {
+  if (const auto in = top.string("input", 16)) {
+    if (*in != "relative" && *in != "absolute") fail("request.value", "input: one of relative, absolute", "input");
+    r.input = *in;
+  }
+}
+
+Request parse_fields(const json& body, const ParseContext& ctx) {
+  Request r;
+  r.endpoint = ctx.endpoint;
+  Fields top(body, "");
+  switch (ctx.endpoint) {
+    case Endpoint::render:
+      parse_scene(top, r, ctx);
+      parse_camera(top, r);
+      parse_size(top, r, ctx);
+      break;
+    case Endpoint::encode: parse_input_units(top, r); break;
+    case Endpoint::pattern:
+      parse_pattern(top, r, ctx);
+      refuse_scene_options(top);
+      break;
+  }
+  parse_display(top, r, ctx);
+  if (ctx.endpoint == Endpoint::pattern) check_pattern_mode(r);
+  else parse_scene_referred(top, r, ctx);
   parse_output(top, r);
+  r.timeout_s = top.number("timeout_s", 0.001, ctx.limits.max_request_seconds);
+  top.finish();
+  return r;
+}
+
+// ---- POST /v1/selftest ---------------------------------------------------------------------
+
+constexpr std::string_view kSelftestModes[] = {"sdr-srgb", "sdr", "sdr-bt1886", "hdr10", "scrgb", "hlg"};
+
+SelftestRequest parse_selftest_fields(const json& body, const ParseContext& ctx) {
+  SelftestRequest r;
+  Fields top(body, "");
+  if (const auto mode = top.string("mode", 32)) {
+    if (std::find(std::begin(kSelftestModes), std::end(kSelftestModes), *mode) == std::end(kSelftestModes))
+      fail("request.value",
+           fmt::format("mode: unknown mode '{}' (one of: sdr-srgb, sdr, sdr-bt1886, hdr10, scrgb, hlg)", *mode), "mode");
+    r.mode = *mode;
+  }
+  r.peak_nits = top.number("peak_nits", 1e-3, 10000);
+  r.render = top.boolean("render").value_or(true);
   r.timeout_s = top.number("timeout_s", 0.001, ctx.limits.max_request_seconds);
   top.finish();
   return r;
@@ -459,7 +573,10 @@ int json_nesting_depth(std::string_view body) {
   return max_depth;
 }
 
-Result<Request> parse_request(std::string_view body, const ParseContext& ctx) {
+namespace {
+
+// The body as a JSON object: size, nesting depth and syntax checked in that order.
+Result<json> parse_json_object(std::string_view body, const ParseContext& ctx) {
   if (body.size() > ctx.limits.max_body_bytes)
     return make_error("request.limit", fmt::format("request body of {} bytes exceeds the limit of {} bytes",
                                                    body.size(), ctx.limits.max_body_bytes), "");
@@ -476,13 +593,46 @@ Result<Request> parse_request(std::string_view body, const ParseContext& ctx) {
   }
   if (!doc.is_object())
     return make_error("request.type", fmt::format("request: expected a JSON object, got {}", type_name(doc)), "");
-  return parse_request_json(doc, ctx);
+  return doc;
+}
+
+}  // namespace
+
+Result<Request> parse_request(std::string_view body, const ParseContext& ctx) {
+  auto doc = parse_json_object(body, ctx);
+  if (!doc) return doc.error();
+  return parse_request_json(*doc, ctx);
+}
+
+Result<SelftestRequest> parse_selftest_request(std::string_view body, const ParseContext& ctx) {
+  // No body at all means every default, as `hdrd selftest` without options.
+  if (body.find_first_not_of(" \t\r\n") == std::string_view::npos) return SelftestRequest{};
+  auto doc = parse_json_object(body, ctx);
+  if (!doc) return doc.error();
+  try {
+    return parse_selftest_fields(*doc, ctx);
+  } catch (const Fail& f) {
+    return f.error;
+  } catch (const nlohmann::json::exception& e) {
+    return make_error("request.type", std::string("request: ") + e.what(), "");
+  }
+}
+
+nlohmann::json SelftestRequest::canonical() const {
+  return {{"endpoint", "selftest"}, {"mode", mode}, {"peak_nits", peak_nits ? json(*peak_nits) : json(nullptr)},
+          {"render", render}};
 }
 
 nlohmann::json Request::canonical() const {
   json j;
-  j["endpoint"] = endpoint == Endpoint::render ? "render" : "encode";
-  if (endpoint == Endpoint::render) {
+  static constexpr const char* kEndpoints[] = {"render", "encode", "pattern"};
+  j["endpoint"] = kEndpoints[int(endpoint)];
+  if (endpoint == Endpoint::pattern) {
+    j["pattern"] = {{"name", pattern.name}, {"level_nits", pattern.level_nits}, {"area_percent", pattern.area_percent},
+                    {"steps", pattern.steps}, {"labels", pattern.labels}};
+    j["width"] = width;
+    j["height"] = height;
+  } else if (endpoint == Endpoint::render) {
     static constexpr const char* kKinds[] = {"builtin", "inline", "scene_file", "gltf"};
     j["scene"] = {{"kind", kKinds[int(scene.kind)]}, {"name", scene.name}, {"inline", scene.inline_scene},
                   {"path", scene.path.string()}};

@@ -1,5 +1,6 @@
-// The daemon's request model: a JSON body (POST /v1/render, /v1/encode) parsed and
-// validated into a typed request, then mapped to hdrd::EncodeSettings. Pure: no sockets,
+// The daemon's request model: a JSON body (POST /v1/render, /v1/encode, /v1/pattern,
+// /v1/selftest) parsed and validated into a typed request, then mapped to
+// hdrd::EncodeSettings. Pure: no sockets,
 // no GL; the only file-system access is resolving paths inside the configured asset root.
 // Fuzzed by tests/fuzz/request_fuzz.cpp.
 //
@@ -48,7 +49,7 @@ struct RenderDefaults {
   int samples = 1;
 };
 
-enum class Endpoint { render, encode };
+enum class Endpoint { render, encode, pattern };
 
 struct ParseContext {
   Endpoint endpoint = Endpoint::render;
@@ -102,12 +103,23 @@ struct UiSpec {
   bool premultiplied = false;
 };
 
+// POST /v1/pattern: a test pattern by name and its parameters (pattern_catalogue.hpp).
+struct PatternSpec {
+  std::string name;
+  double level_nits = 0;      // window, clipping; 0: the display peak
+  double area_percent = 10;   // window
+  int steps = 0;              // pq-ramp, near-black, sdr-grey; 0: the pattern's default
+  bool labels = true;         // pq-ramp, near-black, clipping, sdr-grey
+};
+
 struct Request {
   Endpoint endpoint = Endpoint::render;
   // render only
   SceneSpec scene;
   CameraSpec camera;
-  int width = 0, height = 0, samples = 1;
+  int width = 0, height = 0, samples = 1;  // width and height: pattern too
+  // pattern only
+  PatternSpec pattern;
   // encode only: how the uploaded EXR's values are meant (empty: from the file)
   std::string input;
   // both
@@ -135,6 +147,17 @@ struct Request {
 // dotted path of the offending field ("display.peak_nits").
 Result<Request> parse_request(std::string_view body, const ParseContext& ctx);
 Result<Request> parse_request_json(const nlohmann::json& body, const ParseContext& ctx);
+
+// POST /v1/selftest: the display-mode suite for one mode (patterns/selftest.hpp). An
+// empty body means hdr10 at its default peak.
+struct SelftestRequest {
+  std::string mode = "hdr10";             // sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb, hlg
+  std::optional<double> peak_nits;        // default: the mode's
+  bool render = true;                     // also render the built-in scenes
+  std::optional<double> timeout_s;
+  nlohmann::json canonical() const;
+};
+Result<SelftestRequest> parse_selftest_request(std::string_view body, const ParseContext& ctx);
 
 // /v1/encode options given as query parameters (mode=hdr10&peak_nits=1000&curve=bt2390...)
 // turned into the JSON request object they stand for. Unknown parameters are errors.

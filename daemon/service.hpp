@@ -56,6 +56,10 @@ class Service final : public HttpHandler {
   void get_metrics(HttpRequest&, std::shared_ptr<Responder>);
   void post_render(HttpRequest&, std::shared_ptr<Responder>);
   void post_encode(HttpRequest&, std::shared_ptr<Responder>);
+  void post_pattern(HttpRequest&, std::shared_ptr<Responder>);   // api_patterns.cpp
+  void post_selftest(HttpRequest&, std::shared_ptr<Responder>);  // api_patterns.cpp
+  // GET /v1/capabilities' "patterns": names, descriptions, sources, parameters, modes.
+  static nlohmann::json pattern_capabilities();
   // Admits a job and connects its reply, cancellation and deadline to the responder.
   void submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Responder>& responder);
 

@@ -50,6 +50,7 @@ constexpr StatusEntry kStatus[] = {
     {"scene.", 422},
     {"gltf.", 422},
     {"camera.", 422},
+    {"pattern.", 422},
     {"render.", 500},
 };
 

@@ -1,6 +1,6 @@
 // Fuzz target for the daemon's request parsing and validation (daemon/request.hpp):
-// JSON bodies for POST /v1/render and /v1/encode, query strings, Accept headers, base64
-// and paths inside an asset root. The first byte picks what the rest is fed to. Links only
+// JSON bodies for POST /v1/render, /v1/encode, /v1/pattern and /v1/selftest, query
+// strings, Accept headers, base64 and paths inside an asset root. The first byte picks what the rest is fed to. Links only
 // hdrd_daemon_request (and the encode pieces it validates with).
 //
 // Invariants checked beyond "no crash": an accepted request is within the limits, has a
@@ -17,6 +17,7 @@
 
 #include "daemon/output.hpp"
 #include "daemon/paths.hpp"
+#include "daemon/pattern_catalogue.hpp"
 #include "daemon/request.hpp"
 
 namespace {
@@ -65,6 +66,11 @@ void check_request(const Result<Request>& r, const ParseContext& ctx) {
     check_error(r.error());
     return;
   }
+  if (r->endpoint == Endpoint::pattern) {
+    check(find_pattern_entry(r->pattern.name) != nullptr);
+    check(r->width >= 1 && r->width <= ctx.limits.max_width);
+    check(r->height >= 1 && r->height <= ctx.limits.max_height);
+  }
   if (r->endpoint == Endpoint::render) {
     check(r->width >= 1 && r->width <= ctx.limits.max_width);
     check(r->height >= 1 && r->height <= ctx.limits.max_height);
@@ -88,7 +94,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   ParseContext ctx;
   ctx.asset_root = asset_root();
   ctx.limits.max_body_bytes = 1 << 20;
-  switch (data[0] % 5) {
+  switch (data[0] % 8) {
     case 0:
     case 1: {  // a render or encode body
       ctx.endpoint = data[0] % 5 == 0 ? Endpoint::render : Endpoint::encode;
@@ -130,6 +136,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       auto p = resolve_in_root(asset_root(), rest, "f");
       if (p) check(is_within(fs::canonical(asset_root()), *p));
       else check_error(p.error());
+      break;
+    }
+    case 5: {  // a pattern body
+      ctx.endpoint = Endpoint::pattern;
+      check_request(parse_request(rest, ctx), ctx);
+      break;
+    }
+    case 6: {  // a selftest body
+      auto r = parse_selftest_request(rest, ctx);
+      if (!r) check_error(r.error());
+      else (void)r->canonical().dump();
       break;
     }
   }

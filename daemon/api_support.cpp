@@ -1,0 +1,57 @@
+#include "daemon/api_support.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+
+#include <fmt/format.h>
+
+namespace hdrd::daemon {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+Reply json_reply(const nlohmann::json& j) {
+  return Reply::json(200, j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+}
+
+std::string media_type(const HttpRequest& r) {
+  const std::string* ct = r.header("content-type");
+  if (!ct) return {};
+  std::string t = ct->substr(0, ct->find(';'));
+  t.erase(std::remove_if(t.begin(), t.end(), [](unsigned char c) { return std::isspace(c); }), t.end());
+  std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return t;
+}
+
+std::optional<Error> check_json_post(const HttpRequest& r) {
+  const std::string mt = media_type(r);
+  if (!mt.empty() && mt != "application/json" && mt != "application/x-www-form-urlencoded" && mt != "text/json")
+    return make_error("request.media_type",
+                      fmt::format("POST {} takes a JSON body (Content-Type: application/json)", r.path.substr(0, 64)));
+  if (!r.query.empty())
+    return make_error("request.unknown_field",
+                      fmt::format("POST {} takes no query parameters; put every option in the JSON body",
+                                  r.path.substr(0, 64)),
+                      r.query[0].first.substr(0, 64));
+  return std::nullopt;
+}
+
+std::string generated_name(std::string_view prefix, std::uint64_t id) {
+  const auto now = std::chrono::system_clock::now().time_since_epoch();
+  return fmt::format("{}-{}-{}-{}", prefix, std::chrono::duration_cast<std::chrono::milliseconds>(now).count(),
+                     ::getpid(), id);
+}
+
+Clock::time_point request_deadline(const HttpRequest& r, std::optional<double> timeout_s, const Config& cfg) {
+  const double limit_s = std::min(timeout_s.value_or(cfg.limits.max_request_seconds), cfg.limits.max_request_seconds);
+  return r.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
+}
+
+std::string canonical_key(const nlohmann::json& canonical) {
+  return canonical.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace hdrd::daemon
