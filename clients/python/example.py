@@ -4,7 +4,8 @@
     python3 clients/python/example.py [--socket PATH] [--out DIR]
 
 Prints the daemon's status and tone curves, renders the default scene as HDR10 PNG and as
-an SDR raw DRM buffer, and shows how an error comes back.
+an SDR raw DRM buffer, fetches a test pattern, runs the HDR10 self-test, and shows how an
+error comes back.
 """
 
 import argparse
@@ -38,6 +39,18 @@ def main():
         m = raw.metadata
         assert len(raw.data) == int(m["stride"]) * int(m["height"])
         print(f"raw {m['fourcc']} buffer: {len(raw.data)} bytes, stride {m['stride']}")
+
+        win = c.pattern("window", params={"level_nits": 1000, "area_percent": 10},
+                        display={"mode": "hdr10", "peak_nits": 1000}, width=192, height=108)
+        path = os.path.join(args.out, "example-window.png")
+        with open(path, "wb") as f:
+            f.write(win.data)
+        print(f"{path}: {win!r}, pattern {win.metadata['pattern']}")
+
+        report = c.selftest("hdr10", peak_nits=1000)
+        failed = [ch["name"] for ch in report["checks"] if not ch["passed"] and not ch["skipped"]]
+        print(f"selftest hdr10 1000: {len(report['checks'])} checks, passed={report['passed']}"
+              + (f", failed: {', '.join(failed)}" if failed else ""))
 
         try:
             c.render({"width": "wide"})

@@ -5,6 +5,8 @@
     frame = c.render({"width": 256, "height": 144, "display": {"mode": "hdr10", "peak_nits": 1000}})
     open("frame.png", "wb").write(frame.data)
     print(frame.metadata["maxcll"], frame.metadata["fourcc"])
+    bars = c.pattern("bt2111", display={"mode": "hlg"})       # ITU-R BT.2111-2 colour bars
+    print(c.selftest("hdr10", peak_nits=1000)["passed"])
 
 Errors from the daemon raise HdrdError with .status, .code, .message and .field.
 """
@@ -171,6 +173,34 @@ class HdrdClient:
         body = dict(request, dump=True)
         status, _, data = self.request("POST", "/v1/render", json.dumps(body),
                                        {"Content-Type": "application/json", "Accept": "application/json"})
+        self._raise_for(status, data)
+        return json.loads(data)
+
+    def pattern(self, name, params=None, display=None, accept="image/png", **fields):
+        """POST /v1/pattern: a standard test pattern (bt2111, pq-ramp, window, near-black,
+        clipping, sdr-grey; capabilities()["patterns"] lists them with their parameters).
+        `params` holds the pattern's parameters ({"level_nits": 1000, "area_percent": 10}),
+        `display` the display target as for render; other request fields (width, height,
+        dump, name, formats) as keyword arguments."""
+        body = {"pattern": name, **fields}
+        if params:
+            body["params"] = params
+        if display is not None:
+            body["display"] = display
+        status, headers, data = self.request(
+            "POST", "/v1/pattern", json.dumps(body),
+            {"Content-Type": "application/json", "Accept": "application/json" if body.get("dump") else accept})
+        self._raise_for(status, data)
+        return json.loads(data) if body.get("dump") else self._frame(headers, data)
+
+    def selftest(self, mode="hdr10", peak_nits=None, render=True):
+        """POST /v1/selftest: the display-mode suite for one mode. Returns the report (a dict);
+        report["passed"] is False when a check failed (the HTTP status is still 200)."""
+        body = {"mode": mode, "render": render}
+        if peak_nits is not None:
+            body["peak_nits"] = peak_nits
+        status, _, data = self.request("POST", "/v1/selftest", json.dumps(body),
+                                       {"Content-Type": "application/json"})
         self._raise_for(status, data)
         return json.loads(data)
 

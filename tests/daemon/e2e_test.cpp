@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -21,6 +22,7 @@
 
 #include "encode/io.hpp"
 #include "encode/pipeline.hpp"
+#include "encode/transfer.hpp"
 #include "tests/daemon/daemon_harness.hpp"
 
 namespace hdrd::testing {
@@ -161,6 +163,10 @@ TEST(DaemonE2E, GetEndpoints) {
   }
   EXPECT_TRUE(curves.count("clip")) << "REFERENCE.md §1.3 defines `clip`";
   EXPECT_GT(j["limits"]["max_width"].get<int>(), 0);
+  std::set<std::string> patterns;
+  for (const auto& p : j["patterns"]) patterns.insert(p["name"]);
+  EXPECT_EQ(patterns, (std::set<std::string>{"bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey"}))
+      << "issue 7's patterns";
 
   auto disp = get(c, "/v1/displays");
   ASSERT_EQ(disp.status, 200) << disp.body;
@@ -446,6 +452,18 @@ TEST(DaemonE2E, MalformedRequestsGetTheRightErrors) {
        "request.unknown_field"},
       {"bad scene JSON", "POST", "/v1/render", json_t, png, R"({"width":64,"height":36,"scene":{"lights":"many"}})",
        422, "scene."},
+      {"unknown pattern", "POST", "/v1/pattern", json_t, png, R"({"pattern":"smpte"})", 400, "request.value"},
+      {"pattern parameter typo", "POST", "/v1/pattern", json_t, png, R"({"pattern":"window","params":{"level":5}})",
+       400, "request.unknown_field"},
+      {"pattern parameter type", "POST", "/v1/pattern", json_t, png, R"({"pattern":"pq-ramp","params":{"steps":"9"}})",
+       400, "request.type"},
+      {"pattern too large", "POST", "/v1/pattern", json_t, png, R"({"pattern":"window","width":100000})", 400,
+       "request.limit"},
+      {"pattern bad JSON", "POST", "/v1/pattern", json_t, png, R"({"pattern":"window")", 400, "request.syntax"},
+      {"selftest unknown mode", "POST", "/v1/selftest", json_t, png, R"({"mode":"hdr12"})", 400, "request.value"},
+      {"selftest unknown field", "POST", "/v1/selftest", json_t, png, R"({"mode":"hdr10","peek":1})", 400,
+       "request.unknown_field"},
+      {"selftest GET", "GET", "/v1/selftest", "", png, "", 405, "request.method"},
   };
   auto c = d.client();
   for (const auto& m : table) {
@@ -727,6 +745,135 @@ TEST(DaemonE2E, DisplayAutoAndEdidTargets) {
   EXPECT_EQ(a.status, 200) << a.body;
 }
 
+// ---- patterns and the self-test (issue 7) -------------------------------------------------
+
+std::uint16_t png_sample(const io::PngInfo& png, int x, int y, int channel) {
+  return png.samples[(std::size_t(y) * png.width + x) * png.channels + channel];
+}
+
+std::uint32_t raw_code(const ClientResponse& r, int x, int y, int channel) {
+  const std::size_t stride = std::stoul(*r.header("x-hdrd-stride"));
+  std::uint32_t word = 0;
+  std::memcpy(&word, r.body.data() + y * stride + x * 4, 4);
+  return (word >> (10 * channel)) & 0x3ff;  // XBGR2101010: R in the low bits
+}
+
+TEST(DaemonE2E, PatternBt2111BarsThroughCurl) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  const fs::path out = d.dir() / "bars.png";
+  auto r = run_command("curl -sS --fail --unix-socket '" + d.socket().string() + "' -H 'Accept: image/png' -d "
+                       "'{\"pattern\":\"bt2111\",\"width\":480,\"height\":270,\"display\":{\"mode\":\"hdr10\"}}' "
+                       "http://localhost/v1/pattern -o '" + out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err << "\n" << d.log();
+  const std::string bytes = read_file(out);
+  auto png = io::read_png_info_memory({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()});
+  ASSERT_TRUE(png.ok()) << png.error().message;
+  ASSERT_EQ(png->width, 480);
+  ASSERT_EQ(png->bit_depth, 16);
+  // H.273: BT.2020 primaries, PQ, RGB, narrow range (BT.2111-2 defines the bars in narrow range).
+  ASSERT_TRUE(png->cicp.has_value());
+  EXPECT_EQ(*png->cicp, (std::array<std::uint8_t, 4>{9, 16, 0, 0}));
+  // BT.2111-2 table 2 (PQ, 10-bit narrow): 100 % white = 940, reference (58 %) white = 572;
+  // the 16-bit PNG sample of a narrow code D is D x 2^6 (BT.2100 table 9). The 1920-wide
+  // layout at a quarter: the white bars span x 60..111; row 1 is y < 22.5, row 2 below it.
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(png_sample(*png, 85, 10, c), 940u << 6) << "100% white, channel " << c;
+    EXPECT_EQ(png_sample(*png, 85, 80, c), 572u << 6) << "ref white, channel " << c;
+  }
+  EXPECT_EQ(png_sample(*png, 20, 10, 0), 414u << 6) << "40 % grey at the left edge";
+}
+
+TEST(DaemonE2E, PatternWindowLevelInEveryForm) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  auto c = d.client();
+  const std::string body =
+      R"({"pattern":"window","width":96,"height":54,"params":{"level_nits":1000,"area_percent":10},)"
+      R"("display":{"mode":"hdr10","peak_nits":1000}})";
+  // ST 2084: 1000 cd/m2 is PQ 0.7518, code 769 of 1023 in full range; the background is 0.
+  const auto level_code = std::uint32_t(std::lround(transfer::pq_inverse_eotf(1000.0) * 1023));
+  auto raw = post(c, "/v1/pattern", body, "application/octet-stream");
+  ASSERT_EQ(raw.status, 200) << raw.body;
+  EXPECT_EQ(*raw.header("x-hdrd-pattern"), "window");
+  EXPECT_EQ(*raw.header("x-hdrd-tone-curve"), "clip");
+  for (int ch = 0; ch < 3; ++ch) {
+    EXPECT_EQ(raw_code(raw, 48, 27, ch), level_code) << "window centre";
+    EXPECT_EQ(raw_code(raw, 2, 2, ch), 0u) << "background";
+  }
+  auto png_reply = post(c, "/v1/pattern", body, "image/png");
+  ASSERT_EQ(png_reply.status, 200);
+  auto png = io::read_png_info_memory(
+      {reinterpret_cast<const std::uint8_t*>(png_reply.body.data()), png_reply.body.size()});
+  ASSERT_TRUE(png.ok()) << png.error().message;
+  const double nits = transfer::pq_eotf(png_sample(*png, 48, 27, 1) / 65535.0);
+  EXPECT_NEAR(nits, 1000.0, 1000.0 - transfer::pq_eotf((level_code - 1) / 1023.0)) << "within one code";
+  auto exr = post(c, "/v1/pattern", body, "image/x-exr");
+  ASSERT_EQ(exr.status, 200) << exr.body;
+  auto decoded = io::read_exr_memory({reinterpret_cast<const std::uint8_t*>(exr.body.data()), exr.body.size()});
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  const double exr_nits = decoded->image.px(48, 27)[1] * *decoded->white_luminance;
+  EXPECT_NEAR(exr_nits, 1000.0, 5.0) << "EXR value x whiteLuminance = cd/m2 (half float)";
+  // The same window for scRGB (no PNG form) comes back as EXR by default.
+  auto scrgb = post(c, "/v1/pattern", R"({"pattern":"window","width":96,"height":54,"display":{"mode":"scrgb"}})",
+                    "*/*");
+  ASSERT_EQ(scrgb.status, 200) << scrgb.body;
+  EXPECT_EQ(*scrgb.header("content-type"), "image/x-exr");
+}
+
+TEST(DaemonE2E, PatternDumpAndModeErrors) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  auto c = d.client();
+  auto dump = post(c, "/v1/pattern",
+                   R"({"pattern":"clipping","width":192,"height":108,"params":{"level_nits":600},"dump":true,)"
+                   R"("name":"clip","display":{"mode":"hdr10","peak_nits":1000}})",
+                   "application/json");
+  ASSERT_EQ(dump.status, 200) << dump.body;
+  const auto side = json::parse(dump.body);
+  EXPECT_EQ(side["settings"]["pattern"]["name"], "clipping");
+  EXPECT_EQ(side["settings"]["pattern"]["level_nits"], 600);
+  for (const char* f : {"png", "exr", "raw"}) EXPECT_TRUE(fs::exists(d.dumps() / (std::string("clip.") + f))) << f;
+  auto bad = post(c, "/v1/pattern", R"({"pattern":"bt2111","display":{"mode":"sdr"}})");
+  EXPECT_EQ(bad.status, 400);
+  EXPECT_EQ(json::parse(bad.body)["error"]["field"], "display.mode");
+  auto tone = post(c, "/v1/pattern", R"({"pattern":"window","tone":{"curve":"bt2390"}})");
+  EXPECT_EQ(tone.status, 400);
+  EXPECT_EQ(json::parse(tone.body)["error"]["field"], "tone");
+}
+
+TEST(DaemonE2E, SelftestHdr10At1000NitsPasses) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  auto c = d.client();
+  auto r = post(c, "/v1/selftest", R"({"mode":"hdr10","peak_nits":1000})", "application/json");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(*r.header("x-hdrd-selftest"), "passed");
+  const auto report = json::parse(r.body);
+  EXPECT_EQ(report["mode"], "hdr10");
+  EXPECT_EQ(report["peak_nits"], 1000);
+  EXPECT_TRUE(report["passed"].get<bool>()) << report.dump(1);
+  std::set<std::string> names;
+  for (const auto& check : report["checks"]) {
+    names.insert(check["name"]);
+    EXPECT_FALSE(check["source"].get<std::string>().empty()) << "each check names its source";
+  }
+  EXPECT_TRUE(names.count("paper-white/clip"));
+  const bool rendered = json::parse(get(c, "/v1/status").body)["renderer"]["available"].get<bool>();
+  if (rendered) EXPECT_TRUE(names.count("peak/scene-material-grid")) << "the render worker rendered the scenes";
+  // No body: hdr10 at its default peak. render=false: the scene checks are skipped, not failed.
+  auto plain = c.request("POST", "/v1/selftest", "", {});
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->status, 200) << plain->body;
+  auto quick = post(c, "/v1/selftest", R"({"mode":"hlg","render":false})", "application/json");
+  ASSERT_EQ(quick.status, 200) << quick.body;
+  bool skipped_render = false;
+  const auto quick_report = json::parse(quick.body);
+  for (const auto& check : quick_report["checks"])
+    if (check["name"] == "render") skipped_render = check["skipped"].get<bool>();
+  EXPECT_TRUE(skipped_render) << quick.body;
+}
+
 // ---- clients -----------------------------------------------------------------------------------
 
 TEST(DaemonE2E, HdrctlAndPythonClient) {
@@ -746,6 +893,27 @@ TEST(DaemonE2E, HdrctlAndPythonClient) {
   r = run_command(hdrctl + " metrics");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("hdrd_requests_total"), std::string::npos);
+  r = run_command(hdrctl + " status --json");
+  ASSERT_EQ(r.exit_code, 0) << "global options after the subcommand: " << r.err;
+  EXPECT_EQ(json::parse(r.out)["service"], "hdrd");
+
+  const fs::path bars = d.dir() / "bars.png";
+  r = run_command(hdrctl + " pattern bt2111 --mode hlg --width 480 --height 270 -o " + bars.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("bt2111 hlg 480x270"), std::string::npos) << r.err;
+  EXPECT_EQ(png_header(read_file(bars)).cicp, std::string("\x09\x12\x00\x00", 4)) << "HLG, narrow range";
+  r = run_command(hdrctl + " pattern --list --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).size(), 6u);
+  r = run_command(hdrctl + " pattern bt2111 --mode sdr -o " + (d.dir() / "no.png").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("display.mode"), std::string::npos) << r.err;
+  r = run_command(hdrctl + " selftest --mode hdr10 --peak 1000");
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("0 failed"), std::string::npos) << r.out;
+  r = run_command(hdrctl + " selftest --mode sdr --no-render --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_TRUE(json::parse(r.out)["passed"].get<bool>());
 
   if (run_command("python3 --version").exit_code != 0) GTEST_SKIP() << "python3 missing";
   const fs::path example = source_dir() / "clients/python/example.py";
@@ -753,6 +921,8 @@ TEST(DaemonE2E, HdrctlAndPythonClient) {
                   d.dir().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_EQ(png_header(read_file(d.dir() / "example-hdr10.png")).width, 256u);
+  EXPECT_EQ(png_header(read_file(d.dir() / "example-window.png")).width, 192u);
+  EXPECT_NE(r.out.find("passed=True"), std::string::npos) << r.out;
 }
 
 }  // namespace

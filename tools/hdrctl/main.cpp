@@ -1,5 +1,6 @@
 // hdrctl: the command-line client of `hdrd serve`. Subcommands mirror the API
-// (docs/api.md): render, encode, displays, capabilities, status, metrics.
+// (docs/api.md): render, encode, pattern, selftest, displays, capabilities, status,
+// metrics. The request options and bodies are in options.cpp.
 #include <unistd.h>
 
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/client.hpp"
+#include "tools/hdrctl/options.hpp"
 
 namespace {
 
@@ -22,32 +24,15 @@ using nlohmann::json;
 using hdrd::daemon::Client;
 using hdrd::daemon::ClientOptions;
 using hdrd::daemon::ClientResponse;
+using namespace hdrctl;
 
-struct Failure {  // one line on stderr, then this exit status
-  int exit_code;
-  std::string message;
-};
-
+// Options of hdrctl itself; they may come before or after the subcommand.
 struct Global {
   std::string socket = hdrd::daemon::default_client_socket();
   std::string tcp, token_file;
   double timeout_s = 300;
   bool json = false;
   bool quiet = false;
-};
-
-// Options shared by render and encode: the request body, field by field.
-struct FrameOptions {
-  std::string request_file;
-  std::optional<std::string> mode, range, sdr_curve, display, tonemap, tonemap_apply, exposure_mode, gamut, lut,
-      lut_shaper, grade_placement, ui, ui_upload, name;
-  std::optional<double> peak, black, paper_white, ui_white, sdr_white, exposure_ev, ev100, ui_scale, ui_dim;
-  std::optional<int> bits;
-  std::vector<std::string> tonemap_params, sets;
-  std::vector<int> ui_pos;
-  std::string output, format;
-  bool dump = false;
-  std::string dump_formats;
 };
 
 struct RenderOptions {
@@ -64,112 +49,12 @@ struct EncodeOptions {
   std::optional<std::string> input_units;
 };
 
-std::string read_all(const std::string& path) {
-  if (path == "-") {
-    std::ostringstream ss;
-    ss << std::cin.rdbuf();
-    return ss.str();
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Failure{2, "cannot read " + path};
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string base64(const std::string& in) {
-  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  std::size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const unsigned v = (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8 | (unsigned char)in[i + 2];
-    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
-  }
-  if (i + 1 == in.size()) {
-    const unsigned v = (unsigned char)in[i] << 16;
-    out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
-  } else if (i + 2 == in.size()) {
-    const unsigned v = (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8;
-    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
-  }
-  return out;
-}
-
-// --set a.b.c=VALUE: VALUE is JSON when it parses as JSON, else a string.
-void apply_set(json& body, const std::string& assignment) {
-  const auto eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0) throw Failure{2, "--set expects key.path=value, got '" + assignment + "'"};
-  std::string pointer = "/" + assignment.substr(0, eq);
-  std::replace(pointer.begin(), pointer.end(), '.', '/');
-  json value = json::parse(assignment.substr(eq + 1), nullptr, false);
-  if (value.is_discarded()) value = assignment.substr(eq + 1);
-  body[json::json_pointer(pointer)] = value;
-}
-
-json frame_body(const FrameOptions& o) {
-  json b = o.request_file.empty() ? json::object() : json::parse(read_all(o.request_file), nullptr, false);
-  if (b.is_discarded() || !b.is_object()) throw Failure{2, "--request: not a JSON object"};
-  if (o.display && *o.display == "auto") b["display"] = "auto";
-  auto set = [&](const char* ptr, const auto& v) {
-    if (v) b[json::json_pointer(ptr)] = *v;
-  };
-  set("/display/mode", o.mode);
-  set("/display/peak_nits", o.peak);
-  set("/display/black_nits", o.black);
-  set("/display/paper_white_nits", o.paper_white);
-  set("/display/ui_white_nits", o.ui_white);
-  set("/display/sdr_white_nits", o.sdr_white);
-  set("/display/range", o.range);
-  set("/display/bits", o.bits);
-  set("/display/sdr_curve", o.sdr_curve);
-  set("/tone/curve", o.tonemap);
-  set("/tone/apply", o.tonemap_apply);
-  for (const auto& kv : o.tonemap_params) {
-    const auto eq = kv.find('=');
-    if (eq == std::string::npos) throw Failure{2, "--tonemap-param expects name=value"};
-    b["tone"]["params"][kv.substr(0, eq)] = std::stod(kv.substr(eq + 1));
-  }
-  set("/exposure/mode", o.exposure_mode);
-  set("/exposure_comp_ev", o.exposure_ev);
-  set("/exposure/ev100", o.ev100);
-  set("/gamut", o.gamut);
-  set("/grade/lut", o.lut);
-  set("/grade/shaper", o.lut_shaper);
-  set("/grade/placement", o.grade_placement);
-  set("/ui/path", o.ui);
-  if (o.ui_upload) b["ui"]["png_base64"] = base64(read_all(*o.ui_upload));
-  if (o.ui_pos.size() == 2) {
-    b["ui"]["x"] = o.ui_pos[0];
-    b["ui"]["y"] = o.ui_pos[1];
-  }
-  set("/ui/scale", o.ui_scale);
-  set("/ui/dim", o.ui_dim);
-  set("/name", o.name);
-  if (o.dump) b["dump"] = true;
-  if (!o.dump_formats.empty()) {
-    json f = json::array();
-    std::stringstream ss(o.dump_formats);
-    for (std::string item; std::getline(ss, item, ',');) f.push_back(item);
-    b["formats"] = f;
-  }
-  for (const auto& s : o.sets) apply_set(b, s);
-  return b;
-}
-
-std::string accept_for(const FrameOptions& o) {
-  if (o.dump) return "application/json";
-  if (o.format.empty()) {
-    const std::string ext = fs::path(o.output).extension().string();
-    if (ext == ".exr") return "image/x-exr";
-    if (ext == ".raw" || ext == ".bin") return "application/octet-stream";
-    if (ext == ".png") return "image/png";
-    return "image/png, image/x-exr;q=0.9";  // scrgb has no PNG form
-  }
-  if (o.format == "png") return "image/png";
-  if (o.format == "exr") return "image/x-exr";
-  if (o.format == "raw") return "application/octet-stream";
-  throw Failure{2, "--format must be png, exr or raw"};
-}
+struct SelftestOptions {
+  std::string mode = "hdr10";
+  std::optional<double> peak;
+  bool no_render = false;
+  bool failed_only = false;
+};
 
 Client make_client(const Global& g) {
   ClientOptions co;
@@ -213,8 +98,16 @@ void print(const std::string& s) {
   if (s.empty() || s.back() != '\n') std::fputc('\n', stdout);
 }
 
+// A regular file is replaced atomically (no reader sees half a frame); a device or FIFO
+// (-o /dev/null, a pipe) is written directly.
 void write_atomically(const std::string& path, const std::string& data) {
   const fs::path p(path);
+  std::error_code ec;
+  if (fs::exists(p, ec) && !fs::is_regular_file(p, ec)) {
+    std::ofstream out(p, std::ios::binary);
+    if (!out.write(data.data(), std::streamsize(data.size())).flush()) throw Failure{1, "cannot write " + path};
+    return;
+  }
   fs::path tmp = p;
   tmp += fmt::format(".tmp-{}", ::getpid());
   {
@@ -226,102 +119,142 @@ void write_atomically(const std::string& path, const std::string& data) {
       throw Failure{1, "cannot write " + path};
     }
   }
-  fs::rename(tmp, p);
+  fs::rename(tmp, p, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(tmp, ec);
+    throw Failure{1, "cannot write " + path + ": " + why};
+  }
 }
 
-// Writes the frame (or prints the dump JSON) and a summary of the X-Hdrd-* metadata.
-void finish_frame(const Global& g, const FrameOptions& o, const ClientResponse& r) {
+// The X-Hdrd-* headers as a JSON object (keys without the prefix).
+json frame_metadata(const ClientResponse& r) {
   json meta = json::object();
   for (const auto& [k, v] : r.headers)
     if (k.rfind("x-hdrd-", 0) == 0) meta[k.substr(7)] = v;
   meta["content_type"] = r.header("content-type") ? *r.header("content-type") : "";
   meta["bytes"] = r.body.size();
+  return meta;
+}
+
+std::string summary_line(const json& meta, const std::string& destination) {
+  auto get = [&](const char* k) { return meta.value(k, std::string("?")); };
+  auto optional_ms = [&](const char* k, const char* what) {
+    return meta.contains(k) ? fmt::format(", {} {} ms", what, get(k)) : std::string();
+  };
+  return fmt::format("{}{} {}x{} {} {} MaxCLL {} MaxFALL {} -> {} ({} bytes{}{})",
+                     meta.contains("pattern") ? get("pattern") + " " : "", get("mode"), get("width"), get("height"),
+                     get("fourcc"), meta["content_type"].get<std::string>(), get("maxcll"), get("maxfall"), destination,
+                     meta["bytes"].get<std::size_t>(), optional_ms("render-ms", "render"),
+                     optional_ms("encode-ms", "encode"));
+}
+
+// Writes the frame (or prints the dump's sidecar) and a summary of the X-Hdrd-* metadata:
+// on stderr, or as JSON on stdout with --json.
+void finish_frame(const Global& g, const OutputOptions& o, const ClientResponse& r) {
   if (o.dump) {
     print(r.body);
     return;
   }
-  if (!o.output.empty() && o.output != "-") {
+  json meta = frame_metadata(r);
+  const bool to_stdout = o.output.empty() || o.output == "-";
+  if (!to_stdout) {
     write_atomically(o.output, r.body);
     meta["output"] = o.output;
-  } else if (::isatty(STDOUT_FILENO)) {
+  } else if (o.output.empty() && ::isatty(STDOUT_FILENO)) {
     throw Failure{2, "refusing to write an image to a terminal: use -o FILE (or -o - to force stdout)"};
   } else {
     std::fwrite(r.body.data(), 1, r.body.size(), stdout);
   }
-  const bool to_stdout = o.output.empty() || o.output == "-";
-  auto get = [&](const char* k) { return meta.value(k, std::string("?")); };
-  const std::string line = fmt::format(
-      "{} {}x{} {} {} MaxCLL {} MaxFALL {} -> {} ({} bytes{}{})", get("mode"), get("width"), get("height"),
-      get("fourcc"), meta["content_type"].get<std::string>(), get("maxcll"), get("maxfall"),
-      to_stdout ? "stdout" : o.output, r.body.size(), meta.contains("render-ms") ? ", render " + get("render-ms") + " ms" : "",
-      meta.contains("encode-ms") ? ", encode " + get("encode-ms") + " ms" : "");
   if (g.json && !to_stdout) print(meta.dump(2));
-  else if (!g.quiet) std::fprintf(stderr, "hdrctl: %s\n", line.c_str());
-}
-
-void add_frame_options(CLI::App* app, FrameOptions& o) {
-  app->add_option("--request", o.request_file, "JSON request body to start from (file, or - for stdin)");
-  app->add_option("-o,--output", o.output, "Write the frame here (its extension picks the format)");
-  app->add_option("--format", o.format, "png, exr or raw (DRM buffer); default from -o's extension, else png");
-  app->add_option("--mode", o.mode, "hdr10, hlg, scrgb, sdr, sdr-bt1886");
-  app->add_option("--display", o.display, "'auto': levels from the attached display");
-  app->add_option("--peak", o.peak, "display.peak_nits");
-  app->add_option("--black", o.black, "display.black_nits");
-  app->add_option("--paper-white", o.paper_white, "display.paper_white_nits");
-  app->add_option("--ui-white", o.ui_white, "display.ui_white_nits");
-  app->add_option("--sdr-white", o.sdr_white, "display.sdr_white_nits");
-  app->add_option("--range", o.range, "full or narrow");
-  app->add_option("--bits", o.bits, "8 or 10 (SDR)");
-  app->add_option("--sdr-curve", o.sdr_curve, "srgb or gamma22");
-  app->add_option("--tonemap", o.tonemap, "Tone curve (hdrctl capabilities lists them)");
-  app->add_option("--tonemap-param", o.tonemap_params, "Curve parameter name=value (repeatable)");
-  app->add_option("--tonemap-apply", o.tonemap_apply, "per-channel, max-rgb, luminance, rgb");
-  app->add_option("--exposure-mode", o.exposure_mode, "manual, camera, log-average, histogram, light");
-  app->add_option("--exposure", o.exposure_ev, "Exposure compensation in EV (exposure_comp_ev)");
-  app->add_option("--ev100", o.ev100, "Camera exposure EV100");
-  app->add_option("--gamut", o.gamut, "ictcp or clip");
-  app->add_option("--lut", o.lut, "3D LUT in the daemon's asset root");
-  app->add_option("--lut-shaper", o.lut_shaper, "pq, log2, sqrt, sqrt-sqrt, none");
-  app->add_option("--grade-placement", o.grade_placement, "scene, display, baked");
-  app->add_option("--ui", o.ui, "UI PNG in the daemon's asset root");
-  app->add_option("--ui-upload", o.ui_upload, "Local UI PNG, sent with the request");
-  app->add_option("--ui-pos", o.ui_pos, "UI position X Y")->expected(2);
-  app->add_option("--ui-scale", o.ui_scale, "UI scale");
-  app->add_option("--ui-dim", o.ui_dim, "Darken the frame under the UI (0..1)");
-  app->add_flag("--dump", o.dump, "Write the dump into the daemon's dump directory and print its sidecar");
-  app->add_option("--dump-formats", o.dump_formats, "With --dump: png,exr,raw");
-  app->add_option("--name", o.name, "With --dump: base name of the files");
-  app->add_option("--set", o.sets, "Any request field: key.path=JSON (repeatable)");
+  else if (!g.quiet) std::fprintf(stderr, "hdrctl: %s\n", summary_line(meta, to_stdout ? "stdout" : o.output).c_str());
 }
 
 void run_render(const Global& g, const RenderOptions& o) {
-  json b = frame_body(o.frame);
-  if (o.scene) b["scene"] = *o.scene;
-  if (o.scene_file) b["scene_file"] = *o.scene_file;
-  if (o.gltf) b["gltf"] = *o.gltf;
-  if (o.width) b["width"] = *o.width;
-  if (o.height) b["height"] = *o.height;
-  if (o.samples) b["samples"] = *o.samples;
-  if (o.camera_position.size() == 3) b["camera"]["position"] = o.camera_position;
-  if (o.camera_target.size() == 3) b["camera"]["target"] = o.camera_target;
-  if (o.fov) b["camera"]["fov_y_deg"] = *o.fov;
+  json extra = json::object();
+  if (o.scene) extra["scene"] = *o.scene;
+  if (o.scene_file) extra["scene_file"] = *o.scene_file;
+  if (o.gltf) extra["gltf"] = *o.gltf;
+  if (o.width) extra["width"] = *o.width;
+  if (o.height) extra["height"] = *o.height;
+  if (o.samples) extra["samples"] = *o.samples;
+  if (o.camera_position.size() == 3) extra["camera"]["position"] = o.camera_position;
+  if (o.camera_target.size() == 3) extra["camera"]["target"] = o.camera_target;
+  if (o.fov) extra["camera"]["fov_y_deg"] = *o.fov;
+  const json b = frame_body(o.frame, extra);
   const auto r = call(g, "POST", "/v1/render", b.dump(),
-                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.frame)}});
-  finish_frame(g, o.frame, r);
+                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.frame.out)}});
+  finish_frame(g, o.frame.out, r);
 }
 
 void run_encode(const Global& g, const EncodeOptions& o) {
-  json b = frame_body(o.frame);
-  if (o.input_units) b["input"] = *o.input_units;
+  json extra = json::object();
+  if (o.input_units) extra["input"] = *o.input_units;
+  const json b = frame_body(o.frame, extra);
   std::string content_type;
   const std::string body = hdrd::daemon::multipart_body(
       {{"image", fs::path(o.input).filename().string(), "image/x-exr", read_all(o.input)},
        {"request", "", "application/json", b.dump()}},
       &content_type);
-  const auto r = call(g, "POST", "/v1/encode", body, {{"Content-Type", content_type}, {"Accept", accept_for(o.frame)}});
-  finish_frame(g, o.frame, r);
+  const auto r =
+      call(g, "POST", "/v1/encode", body, {{"Content-Type", content_type}, {"Accept", accept_for(o.frame.out)}});
+  finish_frame(g, o.frame.out, r);
 }
 
+// hdrctl pattern --list: the patterns and their parameters, from GET /v1/capabilities.
+void print_pattern_list(const Global& g) {
+  const json caps = json::parse(call(g, "GET", "/v1/capabilities").body, nullptr, false);
+  if (!caps.is_object() || !caps.contains("patterns")) throw Failure{1, "the daemon does not list patterns"};
+  if (g.json) return print(caps["patterns"].dump(2));
+  std::string s;
+  for (const auto& p : caps["patterns"]) {
+    s += fmt::format("{:11} {}\n", p.value("name", ""), p.value("description", ""));
+    for (const auto& q : p["params"]) {
+      const std::string range = q.contains("min") ? fmt::format(" [{}, {}]", q["min"].dump(), q["max"].dump()) : "";
+      const std::string def = q["default"].is_null() ? q.value("default_from", "") : q["default"].dump();
+      s += fmt::format("{:11}   params.{} ({}{}, default {}): {}\n", "", q.value("name", ""), q.value("type", ""),
+                       range, def, q.value("description", ""));
+    }
+  }
+  print(s);
+}
+
+void run_pattern(const Global& g, const PatternOptions& o) {
+  if (o.list) return print_pattern_list(g);
+  if (o.name.empty()) throw Failure{2, "a pattern name is required (hdrctl pattern --list shows them)"};
+  const json b = pattern_body(o);
+  const auto r = call(g, "POST", "/v1/pattern", b.dump(),
+                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.out)}});
+  finish_frame(g, o.out, r);
+}
+
+std::string selftest_text(const json& report, bool failed_only) {
+  std::string s = fmt::format("selftest {} (peak {} cd/m2, paper white {} cd/m2): {} checks, {} failed, {:.1f} s\n",
+                              report.value("mode", "?"), report.value("peak_nits", 0.0),
+                              report.value("paper_white_nits", 0.0), report["checks"].size(), report.value("failed", 0),
+                              report.value("seconds", 0.0));
+  for (const auto& c : report["checks"]) {
+    const bool passed = c.value("passed", false), skipped = c.value("skipped", false);
+    if (failed_only && (passed || skipped)) continue;
+    s += fmt::format("  {} {:34} {}  [{}]\n", skipped ? "SKIP" : (passed ? "ok  " : "FAIL"), c.value("name", ""),
+                     c.value("detail", ""), c.value("source", ""));
+  }
+  return s;
+}
+
+// Exit status 1 when a check failed (the report is the output; no extra error line).
+int run_selftest(const Global& g, const SelftestOptions& o) {
+  json b = {{"mode", o.mode}};
+  if (o.peak) b["peak_nits"] = *o.peak;
+  if (o.no_render) b["render"] = false;
+  const auto r = call(g, "POST", "/v1/selftest", b.dump(), {{"Content-Type", "application/json"}});
+  const json report = json::parse(r.body, nullptr, false);
+  if (!report.is_object() || !report.contains("checks")) throw Failure{1, "the daemon's selftest answer is not a report"};
+  print(g.json ? report.dump(2) : selftest_text(report, o.failed_only));
+  return report.value("passed", false) ? 0 : 1;
+}
+
+// Pretty GET answers; --json (or a text endpoint) prints the body as it came.
 void run_get(const Global& g, const std::string& path, bool text) {
   const auto r = call(g, "GET", path);
   if (text || g.json) {
@@ -348,18 +281,34 @@ void run_get(const Global& g, const std::string& path, bool text) {
   print(j.dump(2));
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"hdrctl: client for the hdrd daemon (HTTP over its Unix socket; see docs/api.md)", "hdrctl"};
-  app.require_subcommand(1);
-  Global g;
+void add_global_options(CLI::App& app, Global& g) {
   app.add_option("--socket", g.socket, "Daemon socket (default: $HDRD_SOCKET, $XDG_RUNTIME_DIR/hdrd.sock)");
   app.add_option("--tcp", g.tcp, "Connect over TCP host:port instead (needs --token-file)");
   app.add_option("--token-file", g.token_file, "Bearer token for TCP");
   app.add_option("--timeout", g.timeout_s, "Seconds to wait for an answer");
   app.add_flag("--json", g.json, "Machine-readable output on stdout");
   app.add_flag("-q,--quiet", g.quiet, "No progress on stderr");
+  // Options of hdrctl itself may follow the subcommand too (hdrctl status --json).
+  app.fallthrough();
+}
+
+constexpr const char* kGlobalNote =
+    "\nhdrctl's own options (--socket, --tcp, --token-file, --timeout, --json, -q) may also be given here.\n"
+    "While a request takes longer than a second, hdrctl shows \"waiting for the daemon... N s\" on stderr.";
+
+std::string examples(std::initializer_list<const char*> lines) {
+  std::string s = "Examples:\n";
+  for (const char* l : lines) s += std::string("  ") + l + "\n";
+  return s + kGlobalNote;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hdrctl: client for the hdrd daemon (HTTP over its Unix socket; see docs/api.md)", "hdrctl"};
+  app.require_subcommand(1);
+  Global g;
+  add_global_options(app, g);
   app.footer(
       "Examples:\n"
       "  hdrctl status\n"
@@ -367,12 +316,18 @@ int main(int argc, char** argv) {
       "  hdrctl render --scene material-grid --mode scrgb -o frame.exr\n"
       "  hdrctl render --mode sdr --dump --name grid\n"
       "  hdrctl encode ../shared/fixtures/exr/Desk.exr --mode sdr -o desk.png\n"
+      "  hdrctl pattern bt2111 --mode hlg -o bars.png\n"
+      "  hdrctl selftest --mode hdr10 --peak 1000\n"
       "  hdrctl capabilities --json | jq '.tone_curves[].name'\n"
-      "  hdrctl metrics");
+      "  hdrctl metrics\n"
+      "Every subcommand has --help with its own examples. Exit status: 0 ok, 1 an error answer (or a failed\n"
+      "selftest), 2 a usage error, 3 the daemon cannot be reached.");
 
   RenderOptions ro;
   auto* render = app.add_subcommand("render", "POST /v1/render: render a scene and fetch the encoded frame");
-  add_frame_options(render, ro.frame);
+  add_output_options(render, ro.frame.out);
+  add_display_options(render, ro.frame.display);
+  add_pipeline_options(render, ro.frame.pipeline);
   render->add_option("--scene", ro.scene, "Built-in scene name");
   render->add_option("--scene-file", ro.scene_file, "JSON scene in the daemon's asset root");
   render->add_option("--gltf", ro.gltf, "glTF file in the daemon's asset root");
@@ -382,26 +337,62 @@ int main(int argc, char** argv) {
   render->add_option("--camera-position", ro.camera_position, "Camera position X Y Z")->expected(3);
   render->add_option("--camera-target", ro.camera_target, "Camera target X Y Z")->expected(3);
   render->add_option("--fov", ro.fov, "Vertical field of view, degrees");
-  render->footer("Examples:\n  hdrctl render --width 256 --height 144 --mode hdr10 --peak 1000 -o frame.png\n"
-                 "  hdrctl render --request req.json --set display.mode=sdr -o frame.png");
+  render->footer(examples({"hdrctl render --width 256 --height 144 --mode hdr10 --peak 1000 -o frame.png",
+                           "hdrctl render --mode scrgb -o frame.exr                  (format from the extension)",
+                           "hdrctl render --request req.json --set display.mode=sdr -o frame.png",
+                           "hdrctl render --mode sdr --dump --name grid             (prints the sidecar)",
+                           "hdrctl render --width 64 --height 36 -o f.png --json    (metadata as JSON)"}));
 
   EncodeOptions eo;
   auto* encode = app.add_subcommand("encode", "POST /v1/encode: encode a local OpenEXR through the daemon");
   encode->add_option("file", eo.input, "OpenEXR file")->required();
-  add_frame_options(encode, eo.frame);
+  add_output_options(encode, eo.frame.out);
+  add_display_options(encode, eo.frame.display);
+  add_pipeline_options(encode, eo.frame.pipeline);
   encode->add_option("--input", eo.input_units, "relative or absolute (default: from the file's whiteLuminance)");
-  encode->footer("Examples:\n  hdrctl encode Desk.exr --mode hdr10 --peak 600 -o desk.png");
+  encode->footer(examples({"hdrctl encode Desk.exr --mode hdr10 --peak 600 -o desk.png",
+                           "hdrctl encode Desk.exr --mode scrgb --tonemap bt2390 -o desk.exr",
+                           "hdrctl encode Desk.exr --mode sdr --dump --dump-formats png,raw --name desk"}));
+
+  PatternOptions po;
+  auto* pattern = app.add_subcommand("pattern", "POST /v1/pattern: a standard HDR test pattern for a display mode");
+  add_pattern_options(pattern, po);
+  add_output_options(pattern, po.out);
+  add_display_options(pattern, po.display);
+  pattern->footer(examples({"hdrctl pattern --list",
+                            "hdrctl pattern bt2111 --mode hdr10 -o bars-pq.png       (ITU-R BT.2111-2, narrow range)",
+                            "hdrctl pattern window --mode hdr10 --peak 1000 --level 1000 --area 10 -o win.png",
+                            "hdrctl pattern pq-ramp --steps 21 --width 1920 --height 200 -o ramp.png",
+                            "hdrctl pattern clipping --mode hdr10 --peak 10000 --level 1000 --dump --name clip",
+                            "hdrctl pattern window --mode scrgb -o win.exr --json"}));
+
+  SelftestOptions so;
+  auto* selftest = app.add_subcommand("selftest", "POST /v1/selftest: the daemon's display-mode suite for one mode");
+  selftest->add_option("--mode", so.mode, "sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb or hlg")->capture_default_str();
+  selftest->add_option("--peak", so.peak, "Display peak luminance, cd/m2 (default: the mode's)");
+  selftest->add_flag("--no-render", so.no_render, "Skip the rendered built-in scenes");
+  selftest->add_flag("--failed", so.failed_only, "Print only failed checks (text output)");
+  selftest->footer(examples({"hdrctl selftest --mode hdr10 --peak 1000",
+                             "hdrctl selftest --mode hlg --json | jq '.checks[] | select(.passed == false)'",
+                             "hdrctl selftest --mode sdr-bt1886 --failed",
+                             "Exit status 1 when a check fails (the daemon still answers 200: docs/api.md)."}));
 
   auto* displays = app.add_subcommand("displays", "GET /v1/displays: attached displays and their HDR capabilities");
-  auto* caps = app.add_subcommand("capabilities", "GET /v1/capabilities: modes, tone curves, limits");
+  auto* caps = app.add_subcommand("capabilities", "GET /v1/capabilities: modes, tone curves, patterns, limits");
   auto* status = app.add_subcommand("status", "GET /v1/status: version, uptime, renderer, queue");
   auto* metrics = app.add_subcommand("metrics", "GET /metrics: Prometheus text");
-  for (auto* s : {displays, caps, status, metrics}) s->footer("Examples:\n  hdrctl " + s->get_name() + " --json");
+  displays->footer(examples({"hdrctl displays", "hdrctl displays --json | jq '.auto'"}));
+  caps->footer(examples({"hdrctl capabilities", "hdrctl capabilities --json | jq '.patterns[].name'"}));
+  status->footer(examples({"hdrctl status", "hdrctl status --json | jq .queue"}));
+  metrics->footer(examples({"hdrctl metrics | grep hdrd_requests_total",
+                            "(the Prometheus text is the output; --json changes nothing)"}));
 
   try {
     app.parse(argc, argv);
     if (*render) run_render(g, ro);
     else if (*encode) run_encode(g, eo);
+    else if (*pattern) run_pattern(g, po);
+    else if (*selftest) return run_selftest(g, so);
     else if (*displays) run_get(g, "/v1/displays", false);
     else if (*caps) run_get(g, "/v1/capabilities", false);
     else if (*status) run_get(g, "/v1/status", false);
