@@ -452,7 +452,8 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
     default: return std::nullopt;
   }
   auto view = [](const FloatBitsLut& l) {
-    return kernels::LutView{l.table().data(), l.base_bits(), l.lo(), l.hi(), std::nextafter(l.hi(), 0.0f)};
+    return kernels::LutView{l.table().data(), l.pairs().data(), l.base_bits(), l.lo(), l.hi(),
+                            std::nextafter(l.hi(), 0.0f)};
   };
   r.m_in = job.m_in.m;
   r.paper_white = job.tone->paper_white;

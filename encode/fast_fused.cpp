@@ -32,9 +32,22 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
   const auto idx = hn::BitCast(di, hn::ShiftRight<kShift>(rel));
   const VF frac = hn::Mul(hn::ConvertTo(df, hn::BitCast(di, hn::And(rel, hn::Set(du, (1u << kShift) - 1)))),
                           hn::Set(df, 1.0f / (1u << kShift)));
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  // Both ends of each bucket with one 64-bit load per lane (half the gathered elements),
+  // then the (value, step) pairs unzipped.
+  const __m512i i32 = idx.raw;
+  const __m512 lo8 = _mm512_castsi512_ps(_mm512_i32gather_epi64(_mm512_castsi512_si256(i32), l.pairs, 8));
+  const __m512 hi8 = _mm512_castsi512_ps(_mm512_i32gather_epi64(_mm512_extracti64x4_epi64(i32, 1), l.pairs, 8));
+  const __m512i even = _mm512_set_epi32(30, 28, 26, 24, 22, 20, 18, 16, 14, 12, 10, 8, 6, 4, 2, 0);
+  const __m512i odd = _mm512_set_epi32(31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3, 1);
+  const VF a{_mm512_permutex2var_ps(lo8, even, hi8)};
+  const VF step{_mm512_permutex2var_ps(lo8, odd, hi8)};
+  return hn::MulAdd(step, frac, a);
+#else
   const VF a = hn::GatherIndex(df, l.table, idx);
   const VF b = hn::GatherIndex(df, l.table + 1, idx);
   return hn::MulAdd(hn::Sub(b, a), frac, a);
+#endif
 }
 
 #undef HDRD_FUSED_POLY  // this file is included once per target

@@ -12,6 +12,7 @@ namespace hdrd::kernels {
 
 struct LutView {
   const float* table = nullptr;  // FloatBitsLut::table()
+  const float* pairs = nullptr;  // FloatBitsLut::pairs()
   std::uint32_t base_bits = 0;
   float lo = 0, hi = 0;
   float hi_prev = 0;  // the largest float below hi

@@ -12,6 +12,11 @@ FloatBitsLut::FloatBitsLut(const std::function<double(double)>& f, int min_exp2,
     const float v = std::bit_cast<float>(base_bits_ + static_cast<std::uint32_t>(i << kShift));
     table_[i] = static_cast<float>(f(static_cast<double>(i < n ? v : hi_)));
   }
+  pairs_.resize(2 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    pairs_[2 * i] = table_[i];
+    pairs_[2 * i + 1] = table_[i + 1] - table_[i];
+  }
 }
 
 }  // namespace hdrd

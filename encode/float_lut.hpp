@@ -39,10 +39,14 @@ class FloatBitsLut {
   float lo() const { return lo_; }
   float hi() const { return hi_; }
   const std::vector<float>& table() const { return table_; }
+  // The table as (value, next value - value) pairs, 8 bytes per bucket: one 64-bit gather
+  // fetches both ends of a bucket (SIMD code).
+  const std::vector<float>& pairs() const { return pairs_; }
   std::uint32_t base_bits() const { return base_bits_; }
 
  private:
   std::vector<float> table_;
+  std::vector<float> pairs_;
   std::uint32_t base_bits_ = 0;
   float lo_ = 0, hi_ = 0;
 };
