@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -59,6 +60,9 @@ class Grade {
 struct GradeSettings {
   std::string lut_path;                  // .cube, or any format OpenColorIO reads
   std::optional<Shaper> shaper;          // scene placement; default pq
+  // The shaper's range when given ("log2:-8:8" -> {-8, 8}; lut.hpp ShaperSpec::min/max),
+  // else the one the file records for the same kind, else the kind's default.
+  std::optional<std::pair<double, double>> shaper_range;
   Placement placement = Placement::display;
   bool trilinear = false;                // default tetrahedral
   // OpenColorIO config-based grading ($OCIO or explicit path)

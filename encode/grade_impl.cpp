@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "encode/grade.hpp"
 #include "encode/lut.hpp"
@@ -222,7 +223,9 @@ ShaperSpec choose_shaper(const GradeSettings& s, const std::optional<ShaperSpec>
     if (recorded && recorded->kind != *s.shaper)
       warn(warnings, fmt::format("{}: the file records shaper {}, using {} as asked", s.lut_path,
                                  lut::to_string(*recorded), to_string(*s.shaper)));
-    return recorded && recorded->kind == *s.shaper ? *recorded : ShaperSpec::defaults(*s.shaper);
+    ShaperSpec spec = recorded && recorded->kind == *s.shaper ? *recorded : ShaperSpec::defaults(*s.shaper);
+    if (s.shaper_range) std::tie(spec.min, spec.max) = *s.shaper_range;
+    return spec;
   }
   return recorded ? *recorded : ShaperSpec::defaults(Shaper::pq);
 }

@@ -53,6 +53,7 @@ TEST_F(LutCli, ErrorsAreOneLine) {
       {"lut export-identity --shaper gamma -o " + (dir_ / "x.png").string(), "shaper 'gamma': unknown shaper"},
       {"lut bake --curve nope -o " + (dir_ / "x.cube").string(), "unknown tone curve 'nope'"},
       {"lut import " + bad + " -o " + (dir_ / "y.cube").string(), "not a PNG file"},
+      {"encode in.exr -o out --lut x.cube --grade scene --lut-shaper log2:-8", "log2 takes LO:HI stops around mid grey"},
   };
   for (const auto& c : cases) {
     const auto r = run(c.args);

@@ -155,6 +155,24 @@ TEST(Grade, DescribeAndGpuLut) {
   EXPECT_EQ(gpu->rgb, Lut3D::identity(17).rgb);
 }
 
+// An explicit range ("--lut-shaper log2:-6:10") wins over the file's and the default.
+TEST(Grade, ExplicitShaperRange) {
+  hdrd::testing::TempDir dir;
+  GradeSettings s;
+  s.lut_path = write_identity(dir, 5, "log.cube", {shaper_comment({Shaper::log2, -8, 8})});
+  s.placement = Placement::scene;
+  s.shaper = Shaper::log2;
+  s.shaper_range = std::pair{-6.0, 10.0};
+  auto g = load_ok(s);
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->describe()["shaper"], "log2:-6:10");
+  EXPECT_EQ(g->gpu_lut()->shaper_min, -6);
+  EXPECT_EQ(g->gpu_lut()->shaper_max, 10);
+  s.shaper = Shaper::sqrt;
+  s.shaper_range = std::pair{0.0, 16.0};
+  EXPECT_EQ(load_ok(s)->describe()["shaper"], "sqrt:16");
+}
+
 TEST(Grade, ShaperChoiceAndWarnings) {
   hdrd::testing::TempDir dir;
   const auto path = write_identity(dir, 5, "log.cube", {shaper_comment({Shaper::log2, -8, 8})});

@@ -12,6 +12,7 @@
 #include "display/displays.hpp"
 #include "display/profile.hpp"
 #include "encode/grade.hpp"
+#include "encode/lut.hpp"
 #include "encode/result.hpp"
 #include "patterns/plot.hpp"
 #include "tools/hdrd/command.hpp"
@@ -80,7 +81,7 @@ void add_pipeline_options(CLI::App& app, PipelineOptions& o) {
 
   const std::string g = "Grading";
   app.add_option("--lut", o.lut_path, "3D LUT (.cube, or any format OpenColorIO reads)")->group(g);
-  app.add_option("--lut-shaper", o.lut_shaper, "Shaper for scene-referred LUTs: pq, log2, sqrt, sqrt-sqrt")->group(g);
+  app.add_option("--lut-shaper", o.lut_shaper, "Shaper for scene-referred LUTs: pq, log2, sqrt, sqrt-sqrt, optionally with its range (log2:-8:8, sqrt:16)")->group(g);
   app.add_option("--grade", o.grade_placement, "Where the LUT applies: scene, display (default) or baked")->group(g);
   app.add_option("--ocio-config", o.ocio_config, "OpenColorIO config (default: $OCIO)")->group(g);
   app.add_option("--ocio-look", o.ocio_look, "OpenColorIO look to apply")->group(g);
@@ -203,8 +204,11 @@ EncodeSettings build_settings(const PipelineOptions& o, exposure::Mode default_e
     gs.ocio_display = o.ocio_display;
     gs.ocio_view = o.ocio_view;
     if (!o.lut_shaper.empty()) {
-      gs.shaper = grade::parse_shaper(o.lut_shaper);
-      if (!gs.shaper) fail("--lut-shaper", fmt::format("'{}' is not pq, log2, sqrt or sqrt-sqrt", o.lut_shaper));
+      // "log2", or with its range: "log2:-8:8", "sqrt:16" (lut.hpp parse_shaper_spec).
+      const auto spec = lut::parse_shaper_spec(o.lut_shaper);
+      if (!spec) fail("--lut-shaper", spec.error().message);
+      gs.shaper = spec->kind;
+      if (o.lut_shaper.find(':') != std::string::npos) gs.shaper_range = std::pair{spec->min, spec->max};
     }
     if (!o.grade_placement.empty()) {
       const auto pl = grade::parse_placement(o.grade_placement);
