@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang-14 (ASan + UBSan, coverage in every hdrd library)
+# and fuzzes each for a while, starting from its checked-in corpus (tests/fuzz/corpus/NAME;
+# new inputs go to a scratch copy, not into the repository). Crashes are left as
+# crash-* files in $BUILD_DIR/fuzz-out/NAME.
+#
+# Usage: scripts/fuzz.sh [-t SECONDS_PER_TARGET] [TARGET...]
+#   targets: edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz
+# env: BUILD_DIR (default build-fuzz), JOBS
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=60
+while getopts "t:h" opt; do
+  case $opt in
+    t) seconds=$OPTARG ;;
+    *) sed -n '2,9p' "$0"; exit 2 ;;
+  esac
+done
+shift $((OPTIND - 1))
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz)
+build_dir=${BUILD_DIR:-build-fuzz}
+command -v clang++-14 >/dev/null || { echo "fuzz: clang++-14 is missing (scripts/install-deps.sh installs it)" >&2; exit 2; }
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHDRD_FUZZ=ON -DHDRD_BUILD_BENCH=OFF >/dev/null
+cmake --build "$build_dir" -j "${JOBS:-$(nproc)}" --target "${targets[@]}"
+status=0
+for t in "${targets[@]}"; do
+  bin=$(find "$build_dir" -type f -name "$t" -perm -u+x | head -n1)
+  out="$build_dir/fuzz-out/$t"
+  mkdir -p "$out/corpus"
+  cp -r tests/fuzz/corpus/"$t"/. "$out/corpus/" 2>/dev/null || true
+  echo "fuzz: $t for ${seconds}s" >&2
+  if ! (cd "$out" && "$OLDPWD/$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 corpus >log.txt 2>&1); then
+    echo "fuzz: $t FAILED, see $out/log.txt and $out/crash-*" >&2
+    status=1
+  else
+    echo "fuzz: $t clean ($(grep -o 'stat::number_of_executed_units: [0-9]*' "$out/log.txt" | tail -1 || true))" >&2
+  fi
+done
+exit $status
