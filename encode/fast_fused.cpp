@@ -70,9 +70,12 @@ HWY_INLINE VF poly(DF df, const PolyView& p, VF v) {
       const float* c = p.coef + k * kSlots + half * 32;
       return VF{_mm512_permutex2var_ps(_mm512_loadu_ps(c), slot.raw, _mm512_loadu_ps(c + 16))};
     };
-    VF acc = coef(kDeg);
-    for (int k = kDeg - 1; k >= 0; --k) acc = hn::MulAdd(acc, u, coef(k));
-    return acc;
+    // Estrin's scheme (three levels instead of six dependent multiply-adds).
+    static_assert(kDeg == 6);
+    const VF u2 = hn::Mul(u, u);
+    const VF p01 = hn::MulAdd(coef(1), u, coef(0)), p23 = hn::MulAdd(coef(3), u, coef(2));
+    const VF p456 = hn::MulAdd(hn::MulAdd(coef(6), u, coef(5)), u, coef(4));
+    return hn::MulAdd(hn::MulAdd(p456, u2, p23), u2, p01);
   };
   VF acc = horner(1);
   const auto low = hn::Lt(slot, hn::Set(di, 32));
@@ -139,12 +142,41 @@ HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
         matrix(df, r.m_container, cr, cg, cb);
         k = hn::Max(k, hn::Max(hn::Max(cr, cg), cb));
       }
+      VF ratio = hn::IfThenZeroElse(hn::Le(k, zero), lut(df, r.tone_lut, k));
       // Above the table: the curve's value at the top, spread over k (saturates at the peak).
-      const VF above = hn::Min(hn::Set(df, 1.0f), hn::Div(hn::Set(df, r.tone_lut.hi), k));
-      const VF ratio = hn::IfThenZeroElse(hn::Le(k, zero), hn::Mul(lut(df, r.tone_lut, k), above));
+      // Rare (2^20 x paper white), so the division stays off the common path.
+      const VF top = hn::Set(df, r.tone_lut.hi);
+      if (!hn::AllFalse(df, hn::Gt(k, top))) ratio = hn::Mul(ratio, hn::Min(hn::Set(df, 1.0f), hn::Div(top, k)));
       R = hn::Mul(R, ratio), G = hn::Mul(G, ratio), B = hn::Mul(B, ratio);
     }
   }
+}
+
+// Container light of pixels [x, x + N) (tone, container matrix, UI), with the mask of
+// those that stayed inside the display gamut (the rest are listed for the exact path).
+HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, int x, VF& R, VF& G, VF& B, VF& work_max) {
+  const int N = static_cast<int>(hn::Lanes(df));
+  load_rgb(df, r, x, R, G, B);
+  R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
+  matrix(df, r.m_in, R, G, B);
+  tone(df, r, R, G, B);
+  work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
+  if (r.m_container) matrix(df, r.m_container, R, G, B);
+  const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
+  const auto ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
+                          hn::And(hn::Le(G, hi), hn::Le(B, hi)));
+  if (!hn::AllTrue(df, ok)) {
+    alignas(64) float okf[64];
+    hn::Store(hn::IfThenElseZero(ok, hn::Set(df, 1.0f)), df, okf);
+    for (int i = 0; i < N; ++i)
+      if (okf[i] == 0.0f) r.fallback[r.fallback_count++] = x + i;
+  }
+  if (r.ui) {
+    VF ur, ug, ub, keep;
+    hn::LoadInterleaved4(df, r.ui + static_cast<std::size_t>(x) * 4, ur, ug, ub, keep);
+    R = hn::MulAdd(R, keep, ur), G = hn::MulAdd(G, keep, ug), B = hn::MulAdd(B, keep, ub);
+  }
+  return ok;
 }
 
 void FusedRowImpl(FusedRow& r) {
@@ -152,37 +184,19 @@ void FusedRowImpl(FusedRow& r) {
   const DU du;
   const DI di;
   const int N = static_cast<int>(hn::Lanes(df));
-  const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
   const VF scale = hn::Set(df, r.code_scale), bias = hn::Set(df, r.code_offset + 0.5f);
   const auto max_code = hn::Set(di, r.max_code);
   auto vmax = hn::Zero(df);
   auto vsum = hn::Zero(df);  // per-lane sums of at most n / N values: float is enough
-  int x = 0;
-  for (; x + N <= r.n; x += N) {
-    VF R, G, B;
-    load_rgb(df, r, x, R, G, B);
-    R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
-    matrix(df, r.m_in, R, G, B);
-    tone(df, r, R, G, B);
-    const VF work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
-    if (r.m_container) matrix(df, r.m_container, R, G, B);
-    const auto ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
-                            hn::And(hn::Le(G, hi), hn::Le(B, hi)));
-    if (!hn::AllTrue(df, ok)) {
-      alignas(64) float okf[64];
-      hn::Store(hn::IfThenElseZero(ok, hn::Set(df, 1.0f)), df, okf);
-      for (int i = 0; i < N; ++i)
-        if (okf[i] == 0.0f) r.fallback[r.fallback_count++] = x + i;
-    }
-    if (r.ui) {
-      VF ur, ug, ub, keep;
-      hn::LoadInterleaved4(df, r.ui + static_cast<std::size_t>(x) * 4, ur, ug, ub, keep);
-      R = hn::MulAdd(R, keep, ur), G = hn::MulAdd(G, keep, ug), B = hn::MulAdd(B, keep, ub);
-    }
-    if (r.out_kind == FusedOut::scrgb) {
-      const hn::Rebind<std::uint16_t, DF> du16;
-      const hn::Rebind<hwy::float16_t, DF> dh;
-      const VF k80 = hn::Set(df, 1.0f / 80.0f);
+  const int n_full = r.n - r.n % N;
+
+  if (r.out_kind == FusedOut::scrgb) {
+    const hn::Rebind<std::uint16_t, DF> du16;
+    const hn::Rebind<hwy::float16_t, DF> dh;
+    const VF k80 = hn::Set(df, 1.0f / 80.0f);
+    for (int x = 0; x < n_full; x += N) {
+      VF R, G, B, work_max;
+      const auto ok = container_light(df, r, x, R, G, B, work_max);
       const auto h_r = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(R, k80)));
       const auto h_g = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(G, k80)));
       const auto h_b = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(B, k80)));
@@ -191,44 +205,65 @@ void FusedRowImpl(FusedRow& r) {
       const VF m = hn::IfThenElseZero(ok, work_max);
       vmax = hn::Max(vmax, m);
       vsum = hn::Add(vsum, m);
-      continue;
     }
-    // Signal -> codes (full: round(E' (2^n - 1)); narrow: round((219 E' + 16) 2^(n-8))).
+  } else {
+    // Two passes per L1-sized chunk: light, then signal and codes. Each pass is a shorter
+    // dependency chain than the whole (table gathers, the polynomial, the content-light
+    // gather), so more iterations overlap in the out-of-order window.
+    constexpr int kChunk = 512;
+    alignas(64) float buf_r[kChunk], buf_g[kChunk], buf_b[kChunk], buf_ok[kChunk];
     const VF one = hn::Set(df, 1.0f), zero = hn::Zero(df);
-    const VF er = hn::Min(hn::Max(signal(df, r, R), zero), one);
-    const VF eg = hn::Min(hn::Max(signal(df, r, G), zero), one);
-    const VF eb = hn::Min(hn::Max(signal(df, r, B), zero), one);
-    const auto cr = hn::Min(hn::ConvertTo(di, hn::MulAdd(er, scale, bias)), max_code);
-    const auto cg = hn::Min(hn::ConvertTo(di, hn::MulAdd(eg, scale, bias)), max_code);
-    const auto cb = hn::Min(hn::ConvertTo(di, hn::MulAdd(eb, scale, bias)), max_code);
-    auto* out32 = reinterpret_cast<std::uint32_t*>(r.out) + x;
-    if (r.out_kind == FusedOut::xrgb8) {
-      const auto w = hn::Or(hn::Or(hn::BitCast(du, cb), hn::ShiftLeft<8>(hn::BitCast(du, cg))),
-                            hn::Or(hn::ShiftLeft<16>(hn::BitCast(du, cr)), hn::Set(du, 0xFF000000u)));
-      hn::StoreU(w, du, out32);
-      continue;
-    }
-    const auto w = hn::Or(hn::Or(hn::BitCast(du, cr), hn::ShiftLeft<10>(hn::BitCast(du, cg))),
-                          hn::Or(hn::ShiftLeft<20>(hn::BitCast(du, cb)), hn::Set(du, 3u << 30)));
-    hn::StoreU(w, du, out32);
-    if (r.signal16) {
-      const hn::Rebind<std::uint16_t, DF> du16;
-      const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
-      auto s16 = [&](VF e, decltype(cr) c) {
-        const VF v = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
-                              : hn::MulAdd(e, k16, half);
-        return hn::DemoteTo(du16, hn::ConvertTo(di, v));
-      };
-      hn::StoreInterleaved3(s16(er, cr), s16(eg, cg), s16(eb, cb), du16, r.signal16 + static_cast<std::size_t>(x) * 3);
-    }
-    if (r.code_to_nits) {
-      const auto cmax = hn::Max(hn::Max(cr, cg), cb);
-      const VF m = hn::IfThenElseZero(ok, hn::GatherIndex(df, r.code_to_nits, cmax));
-      vmax = hn::Max(vmax, m);
-      vsum = hn::Add(vsum, m);
+    for (int x0 = 0; x0 < n_full; x0 += kChunk) {
+      const int x1 = std::min(n_full, x0 + kChunk);
+      for (int x = x0; x < x1; x += N) {
+        VF R, G, B, work_max;
+        const auto ok = container_light(df, r, x, R, G, B, work_max);
+        hn::Store(R, df, buf_r + (x - x0));
+        hn::Store(G, df, buf_g + (x - x0));
+        hn::Store(B, df, buf_b + (x - x0));
+        hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
+      }
+      for (int x = x0; x < x1; x += N) {
+        const VF R = hn::Load(df, buf_r + (x - x0)), G = hn::Load(df, buf_g + (x - x0)), B = hn::Load(df, buf_b + (x - x0));
+        // Signal -> codes (full: round(E' (2^n - 1)); narrow: round((219 E' + 16) 2^(n-8))).
+        const VF er = hn::Min(hn::Max(signal(df, r, R), zero), one);
+        const VF eg = hn::Min(hn::Max(signal(df, r, G), zero), one);
+        const VF eb = hn::Min(hn::Max(signal(df, r, B), zero), one);
+        const auto cr = hn::Min(hn::ConvertTo(di, hn::MulAdd(er, scale, bias)), max_code);
+        const auto cg = hn::Min(hn::ConvertTo(di, hn::MulAdd(eg, scale, bias)), max_code);
+        const auto cb = hn::Min(hn::ConvertTo(di, hn::MulAdd(eb, scale, bias)), max_code);
+        auto* out32 = reinterpret_cast<std::uint32_t*>(r.out) + x;
+        if (r.out_kind == FusedOut::xrgb8) {
+          const auto w = hn::Or(hn::Or(hn::BitCast(du, cb), hn::ShiftLeft<8>(hn::BitCast(du, cg))),
+                                hn::Or(hn::ShiftLeft<16>(hn::BitCast(du, cr)), hn::Set(du, 0xFF000000u)));
+          hn::StoreU(w, du, out32);
+          continue;
+        }
+        const auto w = hn::Or(hn::Or(hn::BitCast(du, cr), hn::ShiftLeft<10>(hn::BitCast(du, cg))),
+                              hn::Or(hn::ShiftLeft<20>(hn::BitCast(du, cb)), hn::Set(du, 3u << 30)));
+        hn::StoreU(w, du, out32);
+        if (r.signal16) {
+          const hn::Rebind<std::uint16_t, DF> du16;
+          const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
+          auto s16 = [&](VF e, decltype(cr) c) {
+            const VF v = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
+                                  : hn::MulAdd(e, k16, half);
+            return hn::DemoteTo(du16, hn::ConvertTo(di, v));
+          };
+          hn::StoreInterleaved3(s16(er, cr), s16(eg, cg), s16(eb, cb), du16,
+                                r.signal16 + static_cast<std::size_t>(x) * 3);
+        }
+        if (r.code_to_nits) {
+          const auto cmax = hn::Max(hn::Max(cr, cg), cb);
+          const auto ok = hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero);
+          const VF m = hn::IfThenElseZero(ok, hn::GatherIndex(df, r.code_to_nits, cmax));
+          vmax = hn::Max(vmax, m);
+          vsum = hn::Add(vsum, m);
+        }
+      }
     }
   }
-  r.done = x;
+  r.done = n_full;
   r.max_nits = std::max<double>(r.max_nits, hn::GetLane(hn::MaxOfLanes(df, vmax)));
   r.sum_nits += hn::GetLane(hn::SumOfLanes(df, vsum));
 }

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 
@@ -50,9 +51,13 @@ class FloatBitsPoly {
     const std::uint32_t rel = std::bit_cast<std::uint32_t>(v) - base_bits_;
     const int slot = static_cast<int>(rel >> 23) + kSlots - segments_;
     const float u = static_cast<float>(rel & 0x7FFFFFu) * (1.0f / 8388608.0f) - 0.5f;
-    float acc = coef_[kDegree * kSlots + slot];
-    for (int k = kDegree - 1; k >= 0; --k) acc = acc * u + coef_[k * kSlots + slot];
-    return acc;
+    const auto c = [&](int k) { return coef_[static_cast<std::size_t>(k * kSlots + slot)]; };
+    // Estrin's scheme with fused multiply-adds, as the kernel evaluates it.
+    static_assert(kDegree == 6);
+    const float u2 = u * u;
+    const float p01 = std::fma(c(1), u, c(0)), p23 = std::fma(c(3), u, c(2));
+    const float p456 = std::fma(std::fma(c(6), u, c(5)), u, c(4));
+    return std::fma(std::fma(p456, u2, p23), u2, p01);
   }
 
  private:
