@@ -893,6 +893,14 @@ TEST(DaemonE2E, HdrctlAndPythonClient) {
   r = run_command(hdrctl + " metrics");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("hdrd_requests_total"), std::string::npos);
+  r = run_command(hdrctl + " metrics --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  bool labelled = false;
+  const auto metrics_json = json::parse(r.out);
+  for (const auto& sample : metrics_json["samples"])
+    if (sample["name"] == "hdrd_requests_total" && sample["labels"].contains("endpoint")) labelled = true;
+  EXPECT_TRUE(labelled) << r.out.substr(0, 400);
+  EXPECT_EQ(metrics_json["types"]["hdrd_requests_total"], "counter");
   r = run_command(hdrctl + " status --json");
   ASSERT_EQ(r.exit_code, 0) << "global options after the subcommand: " << r.err;
   EXPECT_EQ(json::parse(r.out)["service"], "hdrd");

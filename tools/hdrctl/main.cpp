@@ -3,7 +3,9 @@
 // metrics. The request options and bodies are in options.cpp.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -254,10 +256,51 @@ int run_selftest(const Global& g, const SelftestOptions& o) {
   return report.value("passed", false) ? 0 : 1;
 }
 
-// Pretty GET answers; --json (or a text endpoint) prints the body as it came.
+// One Prometheus text-format sample line: name{k="v",...} value.
+json prometheus_sample(const std::string& line) {
+  const auto brace = line.find('{'), space = line.rfind(' ');
+  if (space == std::string::npos) return nullptr;
+  json j = {{"name", line.substr(0, std::min(brace, space))}, {"labels", json::object()}};
+  if (brace != std::string::npos && brace < space) {
+    const std::string labels = line.substr(brace + 1, line.rfind('}', space) - brace - 1);
+    for (std::size_t pos = 0; pos < labels.size();) {
+      const auto eq = labels.find("=\"", pos), end = labels.find('"', eq + 2);
+      if (eq == std::string::npos || end == std::string::npos) break;
+      j["labels"][labels.substr(pos, eq - pos)] = labels.substr(eq + 2, end - eq - 2);
+      pos = end + 2;  // past the quote and the comma
+    }
+  }
+  const std::string value = line.substr(space + 1);
+  j["value"] = value == "+Inf" ? json("+Inf") : json(std::strtod(value.c_str(), nullptr));
+  return j;
+}
+
+// GET /metrics as JSON: {"samples": [{"name", "labels", "value"}], "types": {name: type}}.
+json prometheus_to_json(const std::string& text) {
+  json out = {{"samples", json::array()}, {"types", json::object()}};
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("# TYPE ", 0) == 0) {
+      std::istringstream t(line.substr(7));
+      std::string name, type;
+      t >> name >> type;
+      out["types"][name] = type;
+    } else if (!line.empty() && line[0] != '#') {
+      if (json sample = prometheus_sample(line); !sample.is_null()) out["samples"].push_back(std::move(sample));
+    }
+  }
+  return out;
+}
+
+// Pretty GET answers; --json prints JSON bodies as they came (metrics: converted), and a
+// text endpoint without --json prints its text.
 void run_get(const Global& g, const std::string& path, bool text) {
   const auto r = call(g, "GET", path);
-  if (text || g.json) {
+  if (text) {
+    print(g.json ? prometheus_to_json(r.body).dump(2) : r.body);
+    return;
+  }
+  if (g.json) {
     print(r.body);
     return;
   }
@@ -385,7 +428,7 @@ int main(int argc, char** argv) {
   caps->footer(examples({"hdrctl capabilities", "hdrctl capabilities --json | jq '.patterns[].name'"}));
   status->footer(examples({"hdrctl status", "hdrctl status --json | jq .queue"}));
   metrics->footer(examples({"hdrctl metrics | grep hdrd_requests_total",
-                            "(the Prometheus text is the output; --json changes nothing)"}));
+                            "hdrctl metrics --json | jq '.samples[] | select(.name == \"hdrd_queue_depth\")'"}));
 
   try {
     app.parse(argc, argv);
