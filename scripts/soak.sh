@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Bounded soak of `hdrd serve`: N mixed requests (10 % malformed, some clients hanging up
+# Bounded soak of `hdrd serve`: N mixed requests (renders, encodes, patterns, self-tests,
+# dumps, GETs; 10 % malformed, some clients hanging up
 # mid-request) from C concurrent clients over a temporary Unix socket (nothing else is
 # reachable), then checks: the daemon never crashed and exits 0 on SIGTERM, its RSS grew
 # < 5 % between the end of the warm-up and the end, every well-formed request got a
@@ -103,7 +104,7 @@ assert r.status == 200, r.status
 modes = ["hdr10", "hlg", "sdr", "sdr-bt1886", "scrgb"]
 def valid_request(rng):
     kind = rng.random()
-    if kind < 0.60:
+    if kind < 0.55:
         w, h = rng.choice([(64, 36), (96, 54), (128, 72), (32, 18)])
         mode = rng.choice(modes)
         body = {"width": w, "height": h, "display": {"mode": mode},
@@ -113,6 +114,18 @@ def valid_request(rng):
         accept = rng.choice(["image/png", "application/octet-stream", "image/x-exr"])
         if mode == "scrgb" and accept == "image/png": accept = "image/x-exr"
         return ("render", "POST", "/v1/render", json.dumps(body), {"Content-Type": "application/json", "Accept": accept}, (w, h))
+    if kind < 0.60:
+        w, h = rng.choice([(64, 36), (96, 54), (192, 108)])
+        mode = rng.choice(["hdr10", "hlg"])
+        name = rng.choice(["bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey"])
+        body = {"pattern": name, "width": w, "height": h, "display": {"mode": mode}}
+        if name == "window":
+            body["params"] = {"level_nits": rng.choice([100, 203, 600, 1000]), "area_percent": rng.choice([1, 10, 25])}
+        accept = rng.choice(["image/png", "application/octet-stream", "image/x-exr"])
+        return ("pattern", "POST", "/v1/pattern", json.dumps(body), {"Content-Type": "application/json", "Accept": accept}, (w, h))
+    if kind < 0.605:
+        body = {"mode": rng.choice(["hdr10", "hlg", "sdr", "scrgb", "sdr-bt1886"]), "render": rng.random() < 0.5}
+        return ("selftest", "POST", "/v1/selftest", json.dumps(body), {"Content-Type": "application/json"}, None)
     if kind < 0.70:
         mode = rng.choice(modes)
         return ("encode", "POST", f"/v1/encode?mode={mode}", exr, {"Content-Type": "image/x-exr", "Accept": "application/octet-stream"}, (32, 18))
@@ -140,6 +153,10 @@ def malformed_request(rng):
         ("POST", "/v1/encode", "not an exr", "image/x-exr"),
         ("POST", "/v1/encode?colour=red", "x", "image/x-exr"),
         ("GET", "/nope", None, None),
+        ("POST", "/v1/pattern", '{"pattern":"smpte"}', "application/json"),
+        ("POST", "/v1/pattern", '{"pattern":"window","params":{"level":5}}', "application/json"),
+        ("POST", "/v1/pattern", '{"pattern":"bt2111","display":{"mode":"sdr"}}', "application/json"),
+        ("POST", "/v1/selftest", '{"mode":"hdr12"}', "application/json"),
     ])
 
 def raw_abuse(rng):
@@ -159,7 +176,7 @@ def raw_abuse(rng):
     s.close()
 
 PNG_SIG = b"\x89PNG\r\n\x1a\n"
-stats = {"ok": 0, "malformed_4xx": 0, "abuse": 0, "busy_503": 0, "errors": []}
+stats = {"ok": 0, "malformed_sent": 0, "malformed_4xx": 0, "abuse": 0, "busy_503": 0, "errors": []}
 lock = threading.Lock()
 counter = {"next": 0}
 rss_warm = {}
@@ -174,7 +191,7 @@ def take():
         return n
 
 def check_frame(kind, headers, data, size):
-    if kind in ("render", "encode"):
+    if kind in ("render", "encode", "pattern"):
         w, h = size
         if headers.get("x-hdrd-width") != str(w) or headers.get("x-hdrd-height") != str(h):
             return f"{kind}: size headers {headers.get('x-hdrd-width')}x{headers.get('x-hdrd-height')} != {w}x{h}"
@@ -191,6 +208,8 @@ def check_frame(kind, headers, data, size):
     elif kind == "dump":
         j = json.loads(data)
         if not j.get("files"): return "dump: no files"
+    elif kind == "selftest":
+        if not json.loads(data).get("passed"): return "selftest: a check failed"
     return None
 
 def worker(seed):
@@ -213,6 +232,7 @@ def worker(seed):
                 if resp.getheader("Connection", "").lower() == "close":
                     conn.close(); conn = UnixConnection()
                 with lock:
+                    stats["malformed_sent"] += 1
                     if 400 <= resp.status < 500: stats["malformed_4xx"] += 1
                     else: stats["errors"].append(f"malformed {method} {path} {body[:40] if body else ''} -> {resp.status}")
                 continue
@@ -232,6 +252,7 @@ def worker(seed):
             conn.close(); conn = UnixConnection()
             with lock: stats["errors"].append(f"client exception: {e!r}")
 
+load_start = os.getloadavg()
 t0 = time.time()
 threads = [threading.Thread(target=worker, args=(i,)) for i in range(clients)]
 for t in threads: t.start()
@@ -267,7 +288,8 @@ for n in names:
 growth = 100.0 * (rss_end - rss_warm["kib"]) / rss_warm["kib"] if rss_warm.get("kib") else float("nan")
 summary = {
     "requests": total, "clients": clients, "seconds": round(elapsed, 1), "requests_per_s": round(total / elapsed, 1),
-    "ok": stats["ok"], "malformed_4xx": stats["malformed_4xx"], "hangups_and_garbage": stats["abuse"],
+    "load_average_start": [round(x, 2) for x in load_start], "load_average_end": [round(x, 2) for x in os.getloadavg()],
+    "ok": stats["ok"], "malformed_sent": stats["malformed_sent"], "malformed_4xx": stats["malformed_4xx"], "hangups_and_garbage": stats["abuse"],
     "busy_503": stats["busy_503"], "errors": len(stats["errors"]), "daemon_alive": alive,
     "rss_after_warmup_kib": rss_warm.get("kib"), "rss_end_kib": rss_end, "rss_growth_percent": round(growth, 2),
     "dump_files": len(names), "partial_files": partial,
