@@ -2,6 +2,8 @@
 // summary, and one-line errors for bad input with nothing left behind.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <nlohmann/json.hpp>
 
 #include "encode/io.hpp"
@@ -34,6 +36,12 @@ TEST(RenderCli, WritesDumpsAndTheSceneReferredExr) {
   for (const char* ext : {".png", ".raw", ".json", ".scene.exr"})
     EXPECT_TRUE(std::filesystem::exists(base.string() + ext)) << ext;
   EXPECT_NE(r.err.find("rendered furnace"), std::string::npos) << "progress on stderr: " << r.err;
+  // The sidecar lists every file of the dump, the scene-referred EXR included.
+  std::ifstream sidecar(base.string() + ".json");
+  const auto side = nlohmann::json::parse(sidecar);
+  EXPECT_EQ(side["files"]["scene_exr"], "furnace.scene.exr");
+  EXPECT_EQ(side["files"]["png"], "furnace.png");
+  EXPECT_EQ(side["files"]["raw"], "furnace.raw");
   // The scene EXR: float, absolute cd/m2 (whiteLuminance 1); the furnace is 1000 cd/m2.
   auto exr = io::read_exr(base.string() + ".scene.exr");
   ASSERT_TRUE(exr.ok()) << exr.error().message;

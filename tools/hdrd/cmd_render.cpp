@@ -155,8 +155,11 @@ void run(const RenderOptions& o) {
     std::filesystem::remove(scene_exr, ec);  // all files or none
     throw HdrdError(dumps.error());
   }
+  if (!o.no_scene_exr) {
+    dumps->files["scene_exr"] = scene_exr.string();
+    rewrite_sidecar(frame, *dumps);
+  }
   write_debug_outputs(frame, o.outbase, debug, *dumps);
-  if (!o.no_scene_exr) dumps->files["scene_exr"] = scene_exr.string();
   print_out(summary_text(frame, *dumps, o.common.json, notes));
 }
 

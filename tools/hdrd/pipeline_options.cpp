@@ -255,6 +255,10 @@ void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, 
   const std::filesystem::path path = outbase + ".heatmap.png";
   if (auto ok = io::atomic_write(path, *png); !ok) throw HdrdError(ok.error());
   dumps.files["heatmap"] = path.string();
+  rewrite_sidecar(frame, dumps);
+}
+
+void rewrite_sidecar(const EncodedFrame& frame, const io::DumpResult& dumps) {
   // The sidecar names the files relative to its own directory (docs/dump-format.md §5).
   std::map<std::string, std::string> names;
   for (const auto& [kind, file] : dumps.files)

@@ -68,6 +68,9 @@ struct DebugOutputs {
 };
 // Checks the --debug values (throws HdrdError naming an unknown one): call before any work.
 DebugOutputs parse_debug(const PipelineOptions& o);
+// Rewrites OUTBASE.json so that its "files" lists everything in dumps.files (files written
+// after io::write_dumps: the heatmap, render's scene-referred EXR).
+void rewrite_sidecar(const EncodedFrame& frame, const io::DumpResult& dumps);
 // Writes the asked-for debug files after io::write_dumps, adds them to `dumps.files` (so
 // --json lists them) and rewrites the sidecar so its `files` lists them too.
 void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, const DebugOutputs& debug,
