@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "daemon/text.hpp"
+
 namespace fs = std::filesystem;
 
 namespace hdrd::daemon {
@@ -34,11 +36,11 @@ Result<fs::path> resolve_in_root(const fs::path& root, std::string_view requeste
   if (!is_within(canon_root, full.lexically_normal()) && !is_within(root, full.lexically_normal()))
     return make_error("path.forbidden", f + ": path lies outside the asset root", f);
   const fs::path canon = fs::canonical(full, ec);
-  if (ec) return make_error("path.not_found", f + ": no such file in the asset root: " + std::string(requested), f);
+  if (ec) return make_error("path.not_found", f + ": no such file in the asset root: " + one_line(requested), f);
   if (!is_within(canon_root, canon))
     return make_error("path.forbidden", f + ": path leads outside the asset root (symbolic link)", f);
   if (!fs::is_regular_file(canon, ec))
-    return make_error("path.not_found", f + ": not a regular file: " + std::string(requested), f);
+    return make_error("path.not_found", f + ": not a regular file: " + one_line(requested), f);
   return canon;
 }
 

@@ -9,6 +9,7 @@
 
 #include "daemon/paths.hpp"
 #include "daemon/pattern_catalogue.hpp"
+#include "daemon/text.hpp"
 #include "encode/tonemap.hpp"
 
 namespace hdrd::daemon {
@@ -22,7 +23,7 @@ struct Fail {
   Error error;
 };
 [[noreturn]] void fail(std::string code, std::string message, std::string field) {
-  throw Fail{make_error(std::move(code), std::move(message), std::move(field))};
+  throw Fail{make_error(std::move(code), one_line(message), std::move(field))};
 }
 
 std::string join(const std::string& prefix, std::string_view key) {
@@ -397,8 +398,9 @@ void parse_pattern_param(Fields& pf, const PatternParam& p, PatternSpec& spec) {
     spec.labels = *pf.boolean(p.name);
     return;
   }
-  const double v = p.type == PatternParam::Type::integer ? double(*pf.integer(p.name, std::int64_t(p.min), std::int64_t(p.max)))
-                                                         : *pf.number(p.name, p.min, p.max);
+  const bool integer = p.type == PatternParam::Type::integer;
+  const double v = integer ? double(*pf.integer(p.name, std::int64_t(p.min), std::int64_t(p.max)))
+                           : *pf.number(p.name, p.min, p.max);
   if (p.name == "level_nits") spec.level_nits = v;
   else if (p.name == "area_percent") spec.area_percent = v;
   else if (p.name == "steps") spec.steps = int(v);
@@ -711,7 +713,7 @@ std::span<const QueryParam> query_params() {
 Result<nlohmann::json> query_to_request_json(const std::vector<std::pair<std::string, std::string>>& query) {
   json j = json::object();
   for (const auto& [key, value] : query) {
-    const std::string field = key.substr(0, 64);
+    const std::string field = key.substr(0, 64), shown = one_line(field);
     if (key == "display" && value == "auto") {
       j["display"] = "auto";
       continue;
@@ -719,10 +721,10 @@ Result<nlohmann::json> query_to_request_json(const std::vector<std::pair<std::st
     const QueryParam* param = nullptr;
     for (const auto& p : query_params())
       if (p.name == key) param = &p;
-    if (!param) return make_error("request.unknown_field", fmt::format("query parameter '{}': unknown", field), field);
+    if (!param) return make_error("request.unknown_field", fmt::format("query parameter '{}': unknown", shown), field);
     const json::json_pointer ptr{std::string(param->json_path)};
     if (j.contains(ptr))
-      return make_error("request.conflict", fmt::format("query parameter '{}': given twice", field), field);
+      return make_error("request.conflict", fmt::format("query parameter '{}': given twice", shown), field);
     switch (param->type) {
       case QueryParam::Type::string:
         j[ptr] = value;
@@ -730,14 +732,14 @@ Result<nlohmann::json> query_to_request_json(const std::vector<std::pair<std::st
       case QueryParam::Type::boolean:
         if (value == "true" || value == "1" || value.empty()) j[ptr] = true;
         else if (value == "false" || value == "0") j[ptr] = false;
-        else return make_error("request.type", fmt::format("query parameter '{}': expected true or false", field), field);
+        else return make_error("request.type", fmt::format("query parameter '{}': expected true or false", shown), field);
         break;
       case QueryParam::Type::number:
       case QueryParam::Type::integer: {
         // JSON's number grammar is the strictest readily available check.
         json n = json::parse(value, nullptr, false);
         if (n.is_discarded() || !n.is_number())
-          return make_error("request.type", fmt::format("query parameter '{}': expected a number", field), field);
+          return make_error("request.type", fmt::format("query parameter '{}': expected a number", shown), field);
         j[ptr] = n;
         break;
       }

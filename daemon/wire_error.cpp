@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "daemon/text.hpp"
+
 namespace hdrd::daemon {
 namespace {
 
@@ -65,7 +67,9 @@ unsigned http_status(const Error& e) {
 }
 
 std::string error_body(const Error& e) {
-  nlohmann::json err = {{"code", e.code.empty() ? "internal" : e.code}, {"message", e.message}};
+  // One line whatever the message quotes (the request parser already ensures it; other
+  // handlers quote scene names and file errors too).
+  nlohmann::json err = {{"code", e.code.empty() ? "internal" : e.code}, {"message", one_line(e.message)}};
   if (!e.field.empty()) err["field"] = e.field;
   // Replace invalid UTF-8 (e.g. from a file name) rather than throw.
   return nlohmann::json{{"error", err}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";

@@ -161,6 +161,18 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{R"({"timeout_s":0})", "request.value", "timeout_s"},
         Bad{R"({"input":"relative"})", "request.unknown_field", "input"}));
 
+// A key or value quoted in a message may hold control characters ("\n" in a JSON key, %0A in
+// a query parameter); the message stays one line, the field keeps the key as sent.
+TEST(Request, MessagesStayOneLineWhateverTheyQuote) {
+  auto r = parse(R"({"a\nb":1})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().field, "a\nb");
+  EXPECT_EQ(r.error().message.find('\n'), std::string::npos) << r.error().message;
+  auto q = query_to_request_json({{"mo\nde", "hdr10"}});
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().message.find('\n'), std::string::npos) << q.error().message;
+}
+
 TEST(Request, NestingDepthIsRefusedBeforeParsing) {
   const std::string deep = std::string(100, '[') + std::string(100, ']');
   auto r = parse(deep);
