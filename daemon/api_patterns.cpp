@@ -57,9 +57,10 @@ Error as_request_error(Error e) {
 // What the client should know about the frame it gets: BT.2111 bars are narrow-range
 // 10-bit whatever the display said; a level above the peak is clipped by the encoder.
 void pattern_notes(const EncodedFrame& f, const DisplayTarget& asked, std::vector<std::string>* warnings) {
+  const std::string name = f.settings["pattern"]["name"].get<std::string>();
   if (f.target.range != asked.range || f.target.bits != asked.bits)
-    warnings->push_back(fmt::format("{} is defined as {}-bit {} range codes: sent that way", f.settings["pattern"]["name"].get<std::string>(),
-                                    f.target.bits, to_string(f.target.range)));
+    warnings->push_back(fmt::format("{} is defined as {}-bit {} range codes: sent that way", name, f.target.bits,
+                                    to_string(f.target.range)));
   if (f.settings["pattern"].contains("note")) warnings->push_back(f.settings["pattern"]["note"].get<std::string>());
 }
 
@@ -225,7 +226,8 @@ void Service::post_selftest(HttpRequest& http, std::shared_ptr<Responder> respon
   auto req = parse_selftest_request(http.body, ctx);
   if (!req) return responder->reply(Reply::error(req.error()));
 #ifndef HDRD_HAVE_PATTERNS
-  responder->reply(Reply::error(make_error("pipeline.unavailable", "the display-mode suite is not available in this build")));
+  responder->reply(
+      Reply::error(make_error("pipeline.unavailable", "the display-mode suite is not available in this build")));
 #else
   auto target = patterns::suite_target(req->mode, req->peak_nits);
   if (!target) {
