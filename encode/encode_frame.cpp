@@ -470,8 +470,6 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   r.gamut_hi = detail::gamut_high(t);
   r.out_kind = job.frame->drm_fourcc == kDrmFormatXrgb8888 ? kernels::FusedOut::xrgb8 : kernels::FusedOut::packed10;
   r.signal = view(job.sig->signal);
-  if (const auto& q = job.sig->signal_poly; !q.empty())
-    r.signal_poly = kernels::PolyView{q.coefficients(), q.base_bits(), q.lo(), q.hi_prev(), q.segments()};
   r.code_scale = job.sig->code_scale;
   r.code_offset = job.sig->code_offset;
   r.max_code = job.sig->max_code;

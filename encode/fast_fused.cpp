@@ -9,7 +9,6 @@
 
 #include "encode/fast_fused.hpp"
 #include "encode/float_lut.hpp"
-#include "encode/float_poly.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace hdrd::kernels {
@@ -50,47 +49,7 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
 #endif
 }
 
-#undef HDRD_FUSED_POLY  // this file is included once per target
-#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-#define HDRD_FUSED_POLY 1
-// FloatBitsPoly::operator() for a vector. The coefficients of 32 octaves come from one
-// two-register permute each (vpermt2ps); lanes in the lower 32 slots (tiny values) take
-// a second set only when a vector has any.
-HWY_INLINE VF poly(DF df, const PolyView& p, VF v) {
-  const DU du;
-  const DI di;
-  constexpr int kSlots = FloatBitsPoly::kSlots, kDeg = FloatBitsPoly::kDegree;
-  v = hn::Min(hn::Max(v, hn::Set(df, p.lo)), hn::Set(df, p.hi_prev));
-  const auto rel = hn::Sub(hn::BitCast(du, v), hn::Set(du, p.base_bits));
-  const auto slot = hn::Add(hn::BitCast(di, hn::ShiftRight<23>(rel)), hn::Set(di, kSlots - p.segments));
-  const VF u = hn::MulAdd(hn::ConvertTo(df, hn::BitCast(di, hn::And(rel, hn::Set(du, 0x7FFFFFu)))),
-                          hn::Set(df, 1.0f / 8388608.0f), hn::Set(df, -0.5f));
-  const auto horner = [&](int half) {
-    const auto coef = [&](int k) {
-      const float* c = p.coef + k * kSlots + half * 32;
-      return VF{_mm512_permutex2var_ps(_mm512_loadu_ps(c), slot.raw, _mm512_loadu_ps(c + 16))};
-    };
-    // Estrin's scheme (three levels instead of six dependent multiply-adds).
-    static_assert(kDeg == 6);
-    const VF u2 = hn::Mul(u, u);
-    const VF p01 = hn::MulAdd(coef(1), u, coef(0)), p23 = hn::MulAdd(coef(3), u, coef(2));
-    const VF p456 = hn::MulAdd(hn::MulAdd(coef(6), u, coef(5)), u, coef(4));
-    return hn::MulAdd(hn::MulAdd(p456, u2, p23), u2, p01);
-  };
-  VF acc = horner(1);
-  const auto low = hn::Lt(slot, hn::Set(di, 32));
-  if (!hn::AllFalse(di, low)) acc = hn::IfThenElse(hn::RebindMask(df, low), horner(0), acc);
-  return acc;
-}
-#endif
-
-// The signal transfer: the polynomial where this target has it and the stage fitted one.
-HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) {
-#if HDRD_FUSED_POLY
-  if (r.signal_poly.coef) return poly(df, r.signal_poly, v);
-#endif
-  return lut(df, r.signal, v);
-}
+HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) { return lut(df, r.signal, v); }
 
 HWY_INLINE VF sanitize(DF df, VF v) {
   const VF c = hn::Min(hn::Max(v, hn::Set(df, -1e30f)), hn::Set(df, 1e30f));

@@ -18,14 +18,6 @@ struct LutView {
   float hi_prev = 0;  // the largest float below hi
 };
 
-// FloatBitsPoly for the kernel (null coef: not available, use the LutView).
-struct PolyView {
-  const float* coef = nullptr;  // FloatBitsPoly::coefficients()
-  std::uint32_t base_bits = 0;
-  float lo = 0, hi_prev = 0;
-  int segments = 0;
-};
-
 enum class FusedTone : int { clip = 0, ratio_max = 1, ratio_luminance = 2, per_channel = 3 };
 enum class FusedOut : int { packed10 = 0, xrgb8 = 1, scrgb = 2 };
 
@@ -45,7 +37,6 @@ struct FusedRow {
   const float* ui = nullptr;
   FusedOut out_kind = FusedOut::packed10;
   LutView signal;
-  PolyView signal_poly;  // the same function as a polynomial: used where lane permutes beat gathers
   float code_scale = 1023, code_offset = 0;
   int max_code = 1023;
   bool narrow = false;

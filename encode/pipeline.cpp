@@ -150,13 +150,7 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
     case Mode::scrgb:
       break;
   }
-  if (f) {
-    s.signal = FloatBitsLut(f, min_exp2, max_exp2);
-    // Smooth transfers (PQ) also as polynomials: kinks (clip at the peak, piecewise
-    // curves) do not fit and keep the table only.
-    FloatBitsPoly poly(f, min_exp2, max_exp2);
-    if (poly.max_error() <= kSignalPolyTolerance) s.signal_poly = poly;
-  }
+  if (f) s.signal = FloatBitsLut(f, min_exp2, max_exp2);
   if (t.mode == Mode::hdr10 || t.mode == Mode::hlg) {
     s.code_to_nits.resize(static_cast<std::size_t>(s.max_code) + 1);
     for (int c = 0; c <= s.max_code; ++c) {

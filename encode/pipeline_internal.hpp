@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "encode/float_lut.hpp"
-#include "encode/float_poly.hpp"
 #include "encode/pipeline.hpp"
 
 namespace hdrd::detail {
@@ -29,15 +28,9 @@ struct ToneStage {
 };
 
 // Encoding of container-primaries display nits into the mode's signal.
-// A polynomial signal stage is used when it is this close to the function: 1e-3 of a
-// 10-bit code, 0.07 of a 16-bit PNG sample (PQ's degree-6 fit: 3.3e-7; the 128-point-per-
-// octave table it replaces: 8.5e-7).
-inline constexpr double kSignalPolyTolerance = 1e-6;
-
 struct SignalStage {
   Mode mode = Mode::hdr10;
   FloatBitsLut signal;              // nits -> E' (pq, srgb, gamma 2.2, BT.1886); HLG: E -> E'
-  FloatBitsPoly signal_poly;        // the same within kSignalPolyTolerance, or empty
   float code_scale = 1023, code_offset = 0;  // code = E' * scale + offset (before rounding)
   int max_code = 1023;
   float hlg_peak = 1000, hlg_gamma = 1.2f;
