@@ -121,6 +121,13 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   const detail::ToneStage& tone = *tone_ptr;
   if (tone.kind == ToneKind::reference || tone.kind == ToneKind::none)
     return unsupported(fmt::format("tone curve '{}' is an RGB operator evaluated on the CPU", p.curve_info->name));
+  // A curve applied to luminance can push saturated colours out of the display gamut; the
+  // CPU maps them back in ICtCp (REFERENCE.md §1.5), which this program does not do, so the
+  // codes could differ by more than one.
+  if (tone.kind == ToneKind::ratio && tone.ratio_of_luminance)
+    return unsupported(fmt::format("tone curve '{}' applied to luminance may leave the gamut; gamut mapping runs "
+                                   "on the CPU",
+                                   p.curve_info->name));
   const auto sig_ptr = detail::cached_signal_stage(t);
   const detail::SignalStage& sig = *sig_ptr;
 

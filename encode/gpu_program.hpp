@@ -63,9 +63,10 @@ struct EncodeProgram {
 };
 
 // The program for a prepared pipeline. Unsupported on the GPU (supported = false):
-// RGB-operator curves (AgX, PBR Neutral, the ICtCp mapper), grading LUTs and sRGB-space
-// UI blending, which run on the CPU. Out-of-gamut colours are clipped on the GPU (the
-// CPU maps them in ICtCp); in-gamut content, which is what a render produces, is exact.
+// RGB-operator curves (AgX, PBR Neutral, the ICtCp mapper), curves applied to luminance
+// (they can leave the display gamut, which the CPU maps back in ICtCp), grading LUTs and
+// sRGB-space UI blending, which run on the CPU. What the program covers agrees with the
+// CPU within one code.
 EncodeProgram make_encode_program(const PreparedPipeline& p);
 
 // Builds the frame from the integer target read back (rows bottom-up when

@@ -43,6 +43,12 @@ TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
     EXPECT_NE(prog.unsupported_reason.find(c), std::string::npos);
   }
   EXPECT_TRUE(gpu::make_encode_program(prepare(Mode::hdr10, "clip", img)).supported);
+  // Curves applied to luminance may leave the gamut: the CPU gamut-maps them.
+  for (const char* c : {"reinhard", "drago"}) {
+    const auto prog = gpu::make_encode_program(prepare(Mode::hdr10, c, img));
+    EXPECT_FALSE(prog.supported) << c;
+    EXPECT_NE(prog.unsupported_reason.find("luminance"), std::string::npos) << prog.unsupported_reason;
+  }
 }
 
 TEST(GpuProgram, ReadbackBuildsTheFrameAndMeasuresLight) {
