@@ -167,8 +167,9 @@ void FusedRowImpl(FusedRow& r) {
     }
   } else {
     // Two passes per L1-sized chunk: light, then signal and codes. Each pass is a shorter
-    // dependency chain than the whole (table gathers, the polynomial, the content-light
-    // gather), so more iterations overlap in the out-of-order window.
+    // dependency chain than the whole (tone gathers, signal gathers, the content-light
+    // gather), so more iterations overlap in the out-of-order window. kChunk is a multiple
+    // of every target's lane count.
     constexpr int kChunk = 512;
     alignas(64) float buf_r[kChunk], buf_g[kChunk], buf_b[kChunk], buf_ok[kChunk];
     const VF one = hn::Set(df, 1.0f), zero = hn::Zero(df);
