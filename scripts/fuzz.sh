@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang-14 (ASan + UBSan, coverage in every hdrd library)
-# and fuzzes each for a while, starting from its checked-in corpus (tests/fuzz/corpus/NAME;
+# and fuzzes each for a while, starting from its checked-in corpus (tests/fuzz/corpus/NAME; exr_fuzz: ../shared/fixtures/exr;
 # new inputs go to a scratch copy, not into the repository). Crashes are left as
 # crash-* files in $BUILD_DIR/fuzz-out/NAME.
 #
@@ -30,6 +30,7 @@ for t in "${targets[@]}"; do
   out="$build_dir/fuzz-out/$t"
   mkdir -p "$out/corpus"
   cp -r tests/fuzz/corpus/"$t"/. "$out/corpus/" 2>/dev/null || true
+  if [ "$t" = exr_fuzz ]; then cp ../shared/fixtures/exr/*.exr "$out/corpus/" 2>/dev/null || true; fi
   echo "fuzz: $t for ${seconds}s" >&2
   if ! (cd "$out" && "$OLDPWD/$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 corpus >log.txt 2>&1); then
     echo "fuzz: $t FAILED, see $out/log.txt and $out/crash-*" >&2

@@ -479,6 +479,18 @@ TEST(ExrBadInput, HeaderDeclarationsBeyondTheFileAreRejectedUpFront) {
     EXPECT_NE(e.error().message.find("attribute 'screenWindowWidth' claims 2147483647 bytes"), std::string::npos)
         << e.error().message;
   }
+  // The fuzzer's regressions: 1.6 and 1.7 GB claims on early attributes, whole and cut short.
+  for (const std::int32_t claim : {1'600'000'000, 1'700'000'000})
+    for (const auto& [name, type] : {std::pair{"dataWindow", "box2i"}, std::pair{"compression", "compression"}})
+      for (const bool cut : {false, true}) {
+        auto b = *small;
+        const std::size_t at = attribute_value(b, name, type);
+        put_i32(b, at - 4, claim);
+        if (cut) b.resize(at + 16);
+        const auto e = read_exr_memory(b);
+        ASSERT_FALSE(e.ok()) << name << " " << claim << (cut ? " cut" : "");
+        EXPECT_EQ(e.error().message.find('\n'), std::string::npos);
+      }
   {
     auto b = *small;  // a legal 16000 x 8000 window in a file of a few hundred bytes
     const std::size_t dw = attribute_value(b, "dataWindow", "box2i");
