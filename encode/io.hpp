@@ -94,9 +94,16 @@ std::vector<DumpFormat> default_formats(Mode mode);
 struct DumpResult {
   std::map<std::string, std::string> files;  // "png" -> path, ..., "sidecar" -> path
 };
-// Writes OUTBASE.png / OUTBASE.exr / OUTBASE.raw and OUTBASE.json. Either every file is
-// written or none is left behind. The EXR needs frame.display_nits.
+// A file written with a dump and listed in its sidecar: OUTBASE + suffix, under `kind`
+// (e.g. {"scene_exr", ".scene.exr", bytes} for hdrd render's scene-referred frame).
+struct ExtraFile {
+  std::string kind, suffix;
+  std::vector<std::uint8_t> bytes;
+};
+// Writes OUTBASE.png / OUTBASE.exr / OUTBASE.raw, the extra files and OUTBASE.json (which
+// lists them all). Either every file is written or none is left behind. The EXR needs
+// frame.display_nits.
 Result<DumpResult> write_dumps(const EncodedFrame& frame, const std::filesystem::path& outbase,
-                               const std::vector<DumpFormat>& formats);
+                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra = {});
 
 }  // namespace hdrd::io

@@ -328,7 +328,7 @@ Result<std::vector<std::uint8_t>> dump_bytes(const EncodedFrame& frame, DumpForm
 }  // namespace
 
 Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbase,
-                               const std::vector<DumpFormat>& formats) {
+                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra) {
   if (outbase.empty() || !outbase.has_filename())
     return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
   if (auto ok = detail::check_frame(frame); !ok) return ok.error();
@@ -356,12 +356,22 @@ Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbas
     result.files[std::string(extension(f))] = p.string();
     names[std::string(extension(f))] = p.filename().string();
   }
+  for (const auto& x : extra) {
+    const fs::path p = outbase.string() + x.suffix;
+    result.files[x.kind] = p.string();
+    names[x.kind] = p.filename().string();
+  }
   const fs::path sidecar_path = with_extension(outbase, "json");
   const std::string sidecar = sidecar_json(frame, names).dump(2) + "\n";
 
   std::vector<TempFile> temps;
   for (const auto& [f, bytes] : encoded) {
     auto t = TempFile::write(with_extension(outbase, extension(f)), bytes);
+    if (!t) return t.error();
+    temps.push_back(std::move(t.value()));
+  }
+  for (const auto& x : extra) {
+    auto t = TempFile::write(outbase.string() + x.suffix, x.bytes);
     if (!t) return t.error();
     temps.push_back(std::move(t.value()));
   }

@@ -175,6 +175,20 @@ TEST(WriteDumps, Hdr10WritesEveryFileAndNothingElse) {
     }
 }
 
+// Extra files (render's scene EXR, debug pictures) are written with the dump and listed.
+TEST(WriteDumps, ExtraFilesAreWrittenAndListed) {
+  TempDir tmp;
+  const EncodedFrame f = frame_for(Mode::hdr10);
+  const std::vector<ExtraFile> extra = {{"heatmap", ".heatmap.png", {1, 2, 3}}};
+  const auto r = write_dumps(f, tmp / "d", {DumpFormat::raw}, extra);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(listing(tmp.path()), (std::set<std::string>{"d.raw", "d.heatmap.png", "d.json"}));
+  EXPECT_EQ(r->files.at("heatmap"), (tmp / "d.heatmap.png").string());
+  EXPECT_EQ(testing::read_file(tmp / "d.heatmap.png"), std::string("\x01\x02\x03"));
+  const json j = json::parse(testing::read_file(tmp / "d.json"));
+  EXPECT_EQ(j["files"], (json{{"raw", "d.raw"}, {"heatmap", "d.heatmap.png"}}));
+}
+
 TEST(WriteDumps, ScrgbDefaultsAndEightyNitUnits) {
   TempDir tmp;
   const EncodedFrame f = frame_for(Mode::scrgb);

@@ -66,9 +66,8 @@ void run(const EncodeOptions& o) {
                               {"channels", exr->channels}};
 
   t0 = std::chrono::steady_clock::now();
-  auto dumps = io::write_dumps(*frame, o.outbase, formats);
+  auto dumps = io::write_dumps(*frame, o.outbase, formats, debug_files(*frame, debug));
   if (!dumps) throw HdrdError(dumps.error());
-  write_debug_outputs(*frame, o.outbase, debug, *dumps);
   progress("wrote {} files in {:.0f} ms", dumps->files.size(), ms_since(t0));
   print_out(summary_text(*frame, *dumps, o.common.json, notes));
 }

@@ -140,26 +140,21 @@ void run(const RenderOptions& o) {
                               {"warnings", r.warnings}};
   if (!o.no_scene_exr) frame.settings["render"]["scene_exr"] = scene_exr.string();
 
-  // The scene-referred frame: float32, linear Rec.709, absolute cd/m2 (whiteLuminance 1).
+  // The scene-referred frame: float32, linear Rec.709, absolute cd/m2 (whiteLuminance 1),
+  // written with the dumps (all files or none, listed in the sidecar).
+  auto extra = debug_files(frame, debug);
   if (!o.no_scene_exr) {
     io::ExrWriteOptions ex;
     ex.half = false;
     ex.white_luminance = 1.0;
     ex.attributes["scene"] = r.scene_name;
     ex.attributes["units"] = "cd/m2";
-    if (auto w = io::write_exr(scene_exr, r.scene_nits, ex); !w) throw HdrdError(w.error());
+    auto bytes = io::encode_exr(r.scene_nits, ex);
+    if (!bytes) throw HdrdError(bytes.error());
+    extra.push_back({"scene_exr", ".scene.exr", std::move(*bytes)});
   }
-  auto dumps = io::write_dumps(frame, o.outbase, formats);
-  if (!dumps) {
-    std::error_code ec;
-    std::filesystem::remove(scene_exr, ec);  // all files or none
-    throw HdrdError(dumps.error());
-  }
-  if (!o.no_scene_exr) {
-    dumps->files["scene_exr"] = scene_exr.string();
-    rewrite_sidecar(frame, *dumps);
-  }
-  write_debug_outputs(frame, o.outbase, debug, *dumps);
+  auto dumps = io::write_dumps(frame, o.outbase, formats, extra);
+  if (!dumps) throw HdrdError(dumps.error());
   print_out(summary_text(frame, *dumps, o.common.json, notes));
 }
 

@@ -247,27 +247,14 @@ DebugOutputs parse_debug(const PipelineOptions& o) {
   return d;
 }
 
-void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, const DebugOutputs& debug,
-                         io::DumpResult& dumps) {
-  if (!debug.heatmap) return;
-  auto png = patterns::frame_heatmap(frame).png();
-  if (!png) throw HdrdError(png.error());
-  const std::filesystem::path path = outbase + ".heatmap.png";
-  if (auto ok = io::atomic_write(path, *png); !ok) throw HdrdError(ok.error());
-  dumps.files["heatmap"] = path.string();
-  rewrite_sidecar(frame, dumps);
-}
-
-void rewrite_sidecar(const EncodedFrame& frame, const io::DumpResult& dumps) {
-  // The sidecar names the files relative to its own directory (docs/dump-format.md §5).
-  std::map<std::string, std::string> names;
-  for (const auto& [kind, file] : dumps.files)
-    if (kind != "sidecar") names[kind] = std::filesystem::path(file).filename().string();
-  const std::string sidecar = io::sidecar_json(frame, names).dump(2) + "\n";
-  if (auto ok = io::atomic_write(dumps.files.at("sidecar"),
-                                 std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size()));
-      !ok)
-    throw HdrdError(ok.error());
+std::vector<io::ExtraFile> debug_files(const EncodedFrame& frame, const DebugOutputs& debug) {
+  std::vector<io::ExtraFile> out;
+  if (debug.heatmap) {
+    auto png = patterns::frame_heatmap(frame).png();
+    if (!png) throw HdrdError(png.error());
+    out.push_back({"heatmap", ".heatmap.png", std::move(*png)});
+  }
+  return out;
 }
 
 std::vector<io::DumpFormat> build_formats(const PipelineOptions& o, Mode mode) {

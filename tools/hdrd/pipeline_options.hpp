@@ -68,13 +68,9 @@ struct DebugOutputs {
 };
 // Checks the --debug values (throws HdrdError naming an unknown one): call before any work.
 DebugOutputs parse_debug(const PipelineOptions& o);
-// Rewrites OUTBASE.json so that its "files" lists everything in dumps.files (files written
-// after io::write_dumps: the heatmap, render's scene-referred EXR).
-void rewrite_sidecar(const EncodedFrame& frame, const io::DumpResult& dumps);
-// Writes the asked-for debug files after io::write_dumps, adds them to `dumps.files` (so
-// --json lists them) and rewrites the sidecar so its `files` lists them too.
-void write_debug_outputs(const EncodedFrame& frame, const std::string& outbase, const DebugOutputs& debug,
-                         io::DumpResult& dumps);
+// The asked-for debug pictures, to be written with the dumps (io::write_dumps lists them
+// in the sidecar, and so in --json).
+std::vector<io::ExtraFile> debug_files(const EncodedFrame& frame, const DebugOutputs& debug);
 
 // The sidecar-style summary printed by encode/render (--json) and its human form.
 std::string summary_text(const EncodedFrame& f, const io::DumpResult& dumps, bool json,
