@@ -11,6 +11,11 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <thread>
+
+#if HDRD_HAVE_ZIMG
+#include <zimg.h>
+#endif
 
 #include "encode/pipeline.hpp"
 #include "encode/pipeline_internal.hpp"
@@ -161,6 +166,112 @@ void BM_ocio_hdr10(benchmark::State& st) { run_ocio(st, Mode::hdr10); }
 void BM_ocio_sdr(benchmark::State& st) { run_ocio(st, Mode::sdr); }
 void BM_ocio_scrgb(benchmark::State& st) { run_ocio(st, Mode::scrgb); }
 
+#if HDRD_HAVE_ZIMG
+// zimg 3.0 (the library behind ffmpeg's zscale) doing only what zscale would for this frame:
+// Rec.709 -> Rec.2020 primaries + ST 2084 (HDR10, 10-bit full range in 16-bit words) or the
+// sRGB curve (SDR, 8-bit), no tone curve, no exposure, no pack. zimg works on planes, so its
+// input is the same frame as planar half floats (6 B/px in, 6 or 3 B/px out), which is what
+// zscale is fed. Threads as zscale's slice threading: one graph per horizontal band.
+// args: threads, approximate gamma (zscale's `approximate_gamma`).
+constexpr std::size_t kPlane = static_cast<std::size_t>(kW) * kH;
+
+const std::vector<std::uint16_t>& planar_half() {
+  static const std::vector<std::uint16_t> planes = [] {
+    const auto& img = frame_half();
+    std::vector<std::uint16_t> p(3 * kPlane);
+    for (std::size_t i = 0; i < kPlane; ++i)
+      for (int c = 0; c < 3; ++c) p[c * kPlane + i] = img.rgba[i * 4 + c];
+    return p;
+  }();
+  return planes;
+}
+
+void run_zimg(benchmark::State& st, Mode mode) {
+  const int threads = static_cast<int>(st.range(0));
+  const bool approximate = st.range(1) != 0;
+  const bool hdr = mode == Mode::hdr10;
+  const int out_bytes = hdr ? 2 : 1;
+  // kW * 2 and kW are multiples of 64: planes stay 64-byte aligned from an aligned base.
+  auto* in = static_cast<std::uint16_t*>(std::aligned_alloc(64, 3 * kPlane * 2));
+  auto* out = static_cast<std::uint8_t*>(std::aligned_alloc(64, 3 * kPlane * out_bytes));
+  std::memcpy(in, planar_half().data(), 3 * kPlane * 2);
+
+  const int band = (kH + threads - 1) / threads;
+  struct Slice {
+    zimg_filter_graph* graph = nullptr;
+    void* tmp = nullptr;
+    int y0 = 0, rows = 0;
+  };
+  std::vector<Slice> slices;
+  for (int y0 = 0; y0 < kH; y0 += band) {
+    Slice sl;
+    sl.y0 = y0;
+    sl.rows = std::min(band, kH - y0);
+    zimg_image_format src, dst;
+    zimg_image_format_default(&src, ZIMG_API_VERSION);
+    zimg_image_format_default(&dst, ZIMG_API_VERSION);
+    src.width = dst.width = kW;
+    src.height = dst.height = static_cast<unsigned>(sl.rows);
+    src.pixel_type = ZIMG_PIXEL_HALF;
+    src.color_family = dst.color_family = ZIMG_COLOR_RGB;
+    src.matrix_coefficients = dst.matrix_coefficients = ZIMG_MATRIX_RGB;
+    src.transfer_characteristics = ZIMG_TRANSFER_LINEAR;
+    src.color_primaries = ZIMG_PRIMARIES_709;
+    src.pixel_range = dst.pixel_range = ZIMG_RANGE_FULL;
+    dst.pixel_type = hdr ? ZIMG_PIXEL_WORD : ZIMG_PIXEL_BYTE;
+    dst.depth = hdr ? 10 : 8;
+    dst.transfer_characteristics = hdr ? ZIMG_TRANSFER_ST2084 : ZIMG_TRANSFER_IEC_61966_2_1;
+    dst.color_primaries = hdr ? ZIMG_PRIMARIES_2020 : ZIMG_PRIMARIES_709;
+    zimg_graph_builder_params params;
+    zimg_graph_builder_params_default(&params, ZIMG_API_VERSION);
+    params.cpu_type = ZIMG_CPU_AUTO_64B;
+    params.nominal_peak_luminance = 203.0;  // 1.0 = paper white, as hdrd's relative input
+    params.allow_approximate_gamma = approximate ? 1 : 0;
+    sl.graph = zimg_filter_graph_build(&src, &dst, &params);
+    if (!sl.graph) {
+      char msg[256];
+      zimg_get_last_error(msg, sizeof msg);
+      st.SkipWithError(msg);
+      return;
+    }
+    std::size_t tmp_size = 0;
+    zimg_filter_graph_get_tmp_size(sl.graph, &tmp_size);
+    sl.tmp = std::aligned_alloc(64, (tmp_size + 63) / 64 * 64 + 64);
+    slices.push_back(sl);
+  }
+  auto process = [&](const Slice& sl) {
+    zimg_image_buffer_const src{};
+    zimg_image_buffer dst{};
+    src.version = dst.version = ZIMG_API_VERSION;
+    for (int c = 0; c < 3; ++c) {
+      src.plane[c].data = in + c * kPlane + static_cast<std::size_t>(sl.y0) * kW;
+      src.plane[c].stride = kW * 2;
+      src.plane[c].mask = ZIMG_BUFFER_MAX;
+      dst.plane[c].data = out + (c * kPlane + static_cast<std::size_t>(sl.y0) * kW) * out_bytes;
+      dst.plane[c].stride = kW * out_bytes;
+      dst.plane[c].mask = ZIMG_BUFFER_MAX;
+    }
+    zimg_filter_graph_process(sl.graph, &src, &dst, sl.tmp, nullptr, nullptr, nullptr, nullptr);
+  };
+  for (auto _ : st) {
+    std::vector<std::thread> workers;
+    for (std::size_t i = 1; i < slices.size(); ++i) workers.emplace_back(process, std::cref(slices[i]));
+    process(slices[0]);
+    for (auto& w : workers) w.join();
+    benchmark::DoNotOptimize(out);
+    benchmark::ClobberMemory();
+  }
+  for (auto& sl : slices) {
+    zimg_filter_graph_free(sl.graph);
+    std::free(sl.tmp);
+  }
+  std::free(in);
+  std::free(out);
+}
+void BM_zimg_hdr10(benchmark::State& st) { run_zimg(st, Mode::hdr10); }
+void BM_zimg_sdr(benchmark::State& st) { run_zimg(st, Mode::sdr); }
+#endif
+
 // Accuracy against the double-precision reference, on every 5th pixel of the frame.
 void accuracy(benchmark::State& st, Mode mode) {
   SceneInput in;
@@ -213,6 +324,10 @@ BENCHMARK(BM_hdrd_scrgb)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseReal
 BENCHMARK(BM_ocio_hdr10)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ocio_sdr)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ocio_scrgb)->Unit(benchmark::kMillisecond)->UseRealTime();
+#if HDRD_HAVE_ZIMG
+BENCHMARK(BM_zimg_hdr10)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_zimg_sdr)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+#endif
 BENCHMARK(BM_accuracy_hdr10)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_accuracy_sdr)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_accuracy_scrgb)->Iterations(1)->Unit(benchmark::kMillisecond);

@@ -11,7 +11,7 @@ packages=(
   libdrm-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libtinygltf-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libmicrohttpd-dev libtomlplusplus-dev libhwy-dev
+  libmicrohttpd-dev libtomlplusplus-dev libhwy-dev libzimg-dev
   clang-14 libclang-rt-14-dev
   edid-decode
 )
