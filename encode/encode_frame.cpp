@@ -468,8 +468,15 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   }
   r.gamut_lo = detail::gamut_low(t);
   r.gamut_hi = detail::gamut_high(t);
+  // Clip and the ratio of max(RGB) keep every channel in [0, peak] by construction (the
+  // curves never exceed the peak: tonemap_test); only a container matrix can leave it.
+  r.gamut_check = !(job.container_is_working && (r.tone == kernels::FusedTone::clip ||
+                                                 r.tone == kernels::FusedTone::ratio_max));
   r.out_kind = job.frame->drm_fourcc == kDrmFormatXrgb8888 ? kernels::FusedOut::xrgb8 : kernels::FusedOut::packed10;
   r.signal = view(job.sig->signal);
+  if (!job.sig->codes.empty())
+    r.codes = {job.sig->codes.table().data(), job.sig->codes.base_bits(), job.sig->codes.top_rel(),
+               job.sig->codes.shift()};
   r.code_scale = job.sig->code_scale;
   r.code_offset = job.sig->code_offset;
   r.max_code = job.sig->max_code;

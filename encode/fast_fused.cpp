@@ -51,6 +51,24 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
 
 HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) { return lut(df, r.signal, v); }
 
+// FloatBitsQuantizer::code for a vector: the bucket's code, plus one from the bucket's
+// boundary on. Negative and NaN-free input assumed below 0 (clamped to the first bucket).
+HWY_INLINE hn::Vec<DI> quantize(DF df, const QuantView& q, VF v) {
+  const DI di;
+  const DU du;
+  // Positive floats order as their bits; negative ones are negative as int32 (-> base).
+  const auto bits = hn::Max(hn::BitCast(di, v), hn::Set(di, static_cast<std::int32_t>(q.base_bits)));
+  const auto rel = hn::BitCast(du, hn::Min(hn::Sub(bits, hn::Set(di, static_cast<std::int32_t>(q.base_bits))),
+                                          hn::Set(di, static_cast<std::int32_t>(q.top_rel))));
+  const auto idx = hn::BitCast(di, hn::ShiftRightSame(rel, q.shift));
+  const auto e = hn::GatherIndex(du, q.table, idx);
+  const auto low = hn::And(rel, hn::Set(du, (1u << q.shift) - 1));
+  const auto code = hn::BitCast(di, hn::And(e, hn::Set(du, (1u << FloatBitsQuantizer::kCodeBits) - 1)));
+  const auto before = hn::Lt(hn::BitCast(di, low), hn::BitCast(di, hn::ShiftRight<FloatBitsQuantizer::kCodeBits>(e)));
+  (void)df;
+  return hn::IfThenElse(before, code, hn::Add(code, hn::Set(di, 1)));
+}
+
 HWY_INLINE VF sanitize(DF df, VF v) {
   const VF c = hn::Min(hn::Max(v, hn::Set(df, -1e30f)), hn::Set(df, 1e30f));
   return hn::IfThenElseZero(hn::Eq(v, v), c);  // NaN -> 0
@@ -58,6 +76,18 @@ HWY_INLINE VF sanitize(DF df, VF v) {
 
 HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
   if (r.half_in) {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+    // 16 RGBA half pixels are two vectors; one word permute per channel gathers its 16 values.
+    const __m512i lo = _mm512_loadu_si512(r.half_in + static_cast<std::size_t>(x) * 4);
+    const __m512i hi = _mm512_loadu_si512(r.half_in + static_cast<std::size_t>(x) * 4 + 32);
+    const __m512i ir = _mm512_set_epi16(0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 60, 56, 52, 48, 44, 40,
+                                        36, 32, 28, 24, 20, 16, 12, 8, 4, 0);
+    const __m512i one = _mm512_set1_epi16(1);
+    const __m512i ig = _mm512_add_epi16(ir, one), ib = _mm512_add_epi16(ig, one);
+    R = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ir, hi)))};
+    G = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ig, hi)))};
+    B = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ib, hi)))};
+#else
     const hn::Rebind<std::uint16_t, DF> du16;
     const hn::Rebind<hwy::float16_t, DF> dh;
     hn::Vec<decltype(du16)> r16, g16, b16, a16;
@@ -65,6 +95,7 @@ HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
     R = hn::PromoteTo(df, hn::BitCast(dh, r16));
     G = hn::PromoteTo(df, hn::BitCast(dh, g16));
     B = hn::PromoteTo(df, hn::BitCast(dh, b16));
+#endif
   } else {
     VF a;
     hn::LoadInterleaved4(df, r.float_in + static_cast<std::size_t>(x) * 4, R, G, B, a);
@@ -101,7 +132,8 @@ HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
         matrix(df, r.m_container, cr, cg, cb);
         k = hn::Max(k, hn::Max(hn::Max(cr, cg), cb));
       }
-      VF ratio = hn::IfThenZeroElse(hn::Le(k, zero), lut(df, r.tone_lut, k));
+      // k >= 0; at 0 the table's bottom ratio leaves the black pixel black.
+      VF ratio = lut(df, r.tone_lut, k);
       // Above the table: the curve's value at the top, spread over k (saturates at the peak).
       // Rare (2^20 x paper white), so the division stays off the common path.
       const VF top = hn::Set(df, r.tone_lut.hi);
@@ -116,14 +148,19 @@ HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
 HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, int x, VF& R, VF& G, VF& B, VF& work_max) {
   const int N = static_cast<int>(hn::Lanes(df));
   load_rgb(df, r, x, R, G, B);
-  R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
+  // Finite halves are far inside +-1e30: only NaN and Inf need the documented rule.
+  if (!r.half_in || !hn::AllTrue(df, hn::IsFinite(hn::Add(hn::Add(R, G), B))))
+    R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
   matrix(df, r.m_in, R, G, B);
   tone(df, r, R, G, B);
   work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
   if (r.m_container) matrix(df, r.m_container, R, G, B);
-  const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
-  const auto ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
-                          hn::And(hn::Le(G, hi), hn::Le(B, hi)));
+  auto ok = hn::FirstN(df, N);
+  if (r.gamut_check) {
+    const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
+    ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
+                 hn::And(hn::Le(G, hi), hn::Le(B, hi)));
+  }
   if (!hn::AllTrue(df, ok)) {
     alignas(64) float okf[64];
     hn::Store(hn::IfThenElseZero(ok, hn::Set(df, 1.0f)), df, okf);
@@ -181,17 +218,20 @@ void FusedRowImpl(FusedRow& r) {
         hn::Store(R, df, buf_r + (x - x0));
         hn::Store(G, df, buf_g + (x - x0));
         hn::Store(B, df, buf_b + (x - x0));
-        hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
+        if (r.gamut_check) hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
       }
       for (int x = x0; x < x1; x += N) {
         const VF R = hn::Load(df, buf_r + (x - x0)), G = hn::Load(df, buf_g + (x - x0)), B = hn::Load(df, buf_b + (x - x0));
-        // Signal -> codes (full: round(E' (2^n - 1)); narrow: round((219 E' + 16) 2^(n-8))).
-        const VF er = hn::Min(hn::Max(signal(df, r, R), zero), one);
-        const VF eg = hn::Min(hn::Max(signal(df, r, G), zero), one);
-        const VF eb = hn::Min(hn::Max(signal(df, r, B), zero), one);
-        const auto cr = hn::Min(hn::ConvertTo(di, hn::MulAdd(er, scale, bias)), max_code);
-        const auto cg = hn::Min(hn::ConvertTo(di, hn::MulAdd(eg, scale, bias)), max_code);
-        const auto cb = hn::Min(hn::ConvertTo(di, hn::MulAdd(eb, scale, bias)), max_code);
+        // Codes: exact from the quantiser's table, or round(E' scale + offset) from the
+        // signal table (full: scale 2^n - 1; narrow: 219 2^(n-8), offset 16 2^(n-8)).
+        auto e_of = [&](VF v) { return hn::Min(hn::Max(signal(df, r, v), zero), one); };
+        auto code_of = [&](VF e) { return hn::Min(hn::ConvertTo(di, hn::MulAdd(e, scale, bias)), max_code); };
+        hn::Vec<DI> cr, cg, cb;
+        if (r.codes.table) {
+          cr = quantize(df, r.codes, R), cg = quantize(df, r.codes, G), cb = quantize(df, r.codes, B);
+        } else {
+          cr = code_of(e_of(R)), cg = code_of(e_of(G)), cb = code_of(e_of(B));
+        }
         auto* out32 = reinterpret_cast<std::uint32_t*>(r.out) + x;
         if (r.out_kind == FusedOut::xrgb8) {
           const auto w = hn::Or(hn::Or(hn::BitCast(du, cb), hn::ShiftLeft<8>(hn::BitCast(du, cg))),
@@ -203,20 +243,21 @@ void FusedRowImpl(FusedRow& r) {
                               hn::Or(hn::ShiftLeft<20>(hn::BitCast(du, cb)), hn::Set(du, 3u << 30)));
         hn::StoreU(w, du, out32);
         if (r.signal16) {
+          // PNG samples: round(E' 65535), or the narrow code scaled to 16 bits.
           const hn::Rebind<std::uint16_t, DF> du16;
           const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
-          auto s16 = [&](VF e, decltype(cr) c) {
-            const VF v = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
-                                  : hn::MulAdd(e, k16, half);
-            return hn::DemoteTo(du16, hn::ConvertTo(di, v));
+          auto s16 = [&](VF v, hn::Vec<DI> c) {
+            const VF u = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
+                                  : hn::MulAdd(e_of(v), k16, half);
+            return hn::DemoteTo(du16, hn::ConvertTo(di, u));
           };
-          hn::StoreInterleaved3(s16(er, cr), s16(eg, cg), s16(eb, cb), du16,
+          hn::StoreInterleaved3(s16(R, cr), s16(G, cg), s16(B, cb), du16,
                                 r.signal16 + static_cast<std::size_t>(x) * 3);
         }
         if (r.code_to_nits) {
           const auto cmax = hn::Max(hn::Max(cr, cg), cb);
-          const auto ok = hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero);
-          const VF m = hn::IfThenElseZero(ok, hn::GatherIndex(df, r.code_to_nits, cmax));
+          VF m = hn::GatherIndex(df, r.code_to_nits, cmax);
+          if (r.gamut_check) m = hn::IfThenElseZero(hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero), m);
           vmax = hn::Max(vmax, m);
           vsum = hn::Add(vsum, m);
         }

@@ -18,6 +18,13 @@ struct LutView {
   float hi_prev = 0;  // the largest float below hi
 };
 
+// FloatBitsQuantizer (float_lut.hpp) for a vector.
+struct QuantView {
+  const std::uint32_t* table = nullptr;  // FloatBitsQuantizer::table(), or null: codes from `signal`
+  std::uint32_t base_bits = 0, top_rel = 0;
+  int shift = 16;
+};
+
 enum class FusedTone : int { clip = 0, ratio_max = 1, ratio_luminance = 2, per_channel = 3 };
 enum class FusedOut : int { packed10 = 0, xrgb8 = 1, scrgb = 2 };
 
@@ -32,11 +39,13 @@ struct FusedRow {
   LutView tone_lut;
   const float* m_container = nullptr;  // null: container = working (Rec.2020)
   float gamut_lo = 0, gamut_hi = 0;    // accepted container range (tolerances included)
+  bool gamut_check = true;             // false: the tone keeps every pixel in [0, peak]
   // UI blended in linear container light after the gamut check (not for scRGB): n x
   // (premultiplied nits r, g, b, fraction of the frame kept), or null.
   const float* ui = nullptr;
   FusedOut out_kind = FusedOut::packed10;
-  LutView signal;
+  LutView signal;                      // nits -> E' (PNG samples; codes when `codes` is null)
+  QuantView codes;                     // nits -> code, exact
   float code_scale = 1023, code_offset = 0;
   int max_code = 1023;
   bool narrow = false;

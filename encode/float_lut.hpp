@@ -51,4 +51,47 @@ class FloatBitsLut {
   float lo_ = 0, hi_ = 0;
 };
 
+// A monotonic float -> integer code function, tabulated exactly: every bucket of the
+// float's bit pattern (2^bits_per_octave per octave) holds the code at its start and, when
+// the next code starts inside it, where (in bits from the bucket start). One 32-bit load,
+// a compare and an add give the code the function gives for that very float: no
+// interpolation, no rounding, so a signal quantised this way has no off-by-one codes
+// against the double-precision reference. Used by the fast encode path for
+// nits -> PQ / sRGB / BT.1886 / gamma 2.2 codes, where one code spans at least 1/78 of an
+// octave (10-bit) and 128 to 512 buckets per octave hold at most one code boundary each.
+class FloatBitsQuantizer {
+ public:
+  static constexpr int kCodeBits = 15;  // entry = code at bucket start | offset << kCodeBits
+
+  FloatBitsQuantizer() = default;
+  // code(x) must be non-decreasing on [0, inf) and below 2^kCodeBits. Tabulates it on
+  // [2^min_exp2, 2^max_exp2) with the coarsest grid (128 to 2048 buckets per octave) that
+  // keeps one boundary per bucket; empty() when none does, or when code is not constant
+  // on [0, 2^min_exp2] and on [2^max_exp2, inf) (the kernel clamps into the range).
+  FloatBitsQuantizer(const std::function<int(double)>& code, int min_exp2, int max_exp2);
+
+  bool empty() const { return table_.empty(); }
+  int code(float v) const {
+    const std::uint32_t rel = clamp_rel(v);
+    const std::uint32_t e = table_[rel >> shift_];
+    return static_cast<int>(e & ((1u << kCodeBits) - 1)) + ((rel & mask()) >= (e >> kCodeBits) ? 1 : 0);
+  }
+
+  const std::vector<std::uint32_t>& table() const { return table_; }
+  std::uint32_t base_bits() const { return base_bits_; }
+  std::uint32_t top_rel() const { return top_rel_; }  // the largest bits - base_bits looked up
+  int shift() const { return shift_; }
+  std::uint32_t mask() const { return (1u << shift_) - 1; }
+
+ private:
+  std::uint32_t clamp_rel(float v) const {
+    if (!(v > 0)) return 0;
+    const std::uint32_t bits = std::bit_cast<std::uint32_t>(v);
+    return bits <= base_bits_ ? 0 : std::min(bits - base_bits_, top_rel_);
+  }
+  std::vector<std::uint32_t> table_;
+  std::uint32_t base_bits_ = 0, top_rel_ = 0;
+  int shift_ = 0;
+};
+
 }  // namespace hdrd

@@ -151,6 +151,17 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
       break;
   }
   if (f) s.signal = FloatBitsLut(f, min_exp2, max_exp2);
+  if (f && t.mode != Mode::hlg) {
+    const double scale = t.range == Range::narrow ? 219.0 * std::ldexp(1.0, bits - 8) : s.max_code;
+    const double offset = t.range == Range::narrow ? 16.0 * std::ldexp(1.0, bits - 8) : 0.0;
+    const int max_code = s.max_code;
+    s.codes = FloatBitsQuantizer(
+        [&](double nits) {
+          const double v = std::floor(std::clamp(f(nits), 0.0, 1.0) * scale + offset + 0.5);
+          return std::min(static_cast<int>(v), max_code);
+        },
+        min_exp2, max_exp2);
+  }
   if (t.mode == Mode::hdr10 || t.mode == Mode::hlg) {
     s.code_to_nits.resize(static_cast<std::size_t>(s.max_code) + 1);
     for (int c = 0; c <= s.max_code; ++c) {

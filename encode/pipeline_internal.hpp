@@ -31,6 +31,7 @@ struct ToneStage {
 struct SignalStage {
   Mode mode = Mode::hdr10;
   FloatBitsLut signal;              // nits -> E' (pq, srgb, gamma 2.2, BT.1886); HLG: E -> E'
+  FloatBitsQuantizer codes;         // nits -> code, exact (not HLG, whose signal is not of nits alone)
   float code_scale = 1023, code_offset = 0;  // code = E' * scale + offset (before rounding)
   int max_code = 1023;
   float hlg_peak = 1000, hlg_gamma = 1.2f;
