@@ -403,11 +403,17 @@ std::pair<int, int> ui_columns(const PreparedUi& ui, int width) {
   return {begin, end};
 }
 
-void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll) {
-  const int w = job.width;
-  std::vector<float> row(static_cast<std::size_t>(w) * 4);
-  std::vector<int> fallback(static_cast<std::size_t>(w));
+// One worker's buffers, reused over its bands.
+struct RowScratch {
+  explicit RowScratch(int w) : row(static_cast<std::size_t>(w) * 4), fallback(static_cast<std::size_t>(w)) {}
+  std::vector<float> row;
+  std::vector<int> fallback;
   std::vector<float> ui_row;
+};
+
+void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulator& cll, RowScratch& scratch) {
+  const int w = job.width;
+  auto& [row, fallback, ui_row] = scratch;
   for (int y = y_begin; y < y_end; ++y) {
     if (job.fused && !ui_touches_row(*job.ui, y)) {
       run_fused(job, y, 0, w, row, fallback, cll);
@@ -482,6 +488,7 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   r.max_code = job.sig->max_code;
   r.narrow = job.sig->code_offset != 0;
   r.code_to_nits = t.mode == Mode::hdr10 ? job.sig->code_to_nits.data() : nullptr;
+  if (r.code_to_nits && !job.sig->code_nits_poly.empty()) r.code_nits_poly = job.sig->code_nits_poly.data();
   return r;
 }
 
@@ -536,20 +543,19 @@ Result<void> encode_prepared_into(const SceneInput& in, const PreparedPipeline& 
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hw, 1, std::max(1, h));
   std::vector<ContentLightAccumulator> cll(static_cast<std::size_t>(threads));
-  if (threads == 1) {
-    run_rows(job, 0, h, cll[0]);
-  } else {
-    // Bands of rows handed out dynamically so a slow band (gamut mapping, UI) doesn't stall others.
-    constexpr int kBand = 16;
-    std::atomic<int> next{0};
-    std::vector<std::thread> pool;
-    for (int i = 0; i < threads; ++i)
-      pool.emplace_back([&, i] {
-        for (int y0 = next.fetch_add(kBand); y0 < h; y0 = next.fetch_add(kBand))
-          run_rows(job, y0, std::min(h, y0 + kBand), cll[static_cast<std::size_t>(i)]);
-      });
-    for (auto& th : pool) th.join();
-  }
+  // Bands of rows handed out dynamically so a slow band (gamut mapping, UI) doesn't stall
+  // others; the calling thread is one of the workers.
+  constexpr int kBand = 16;
+  std::atomic<int> next{0};
+  auto worker = [&](int i) {
+    RowScratch scratch(w);
+    for (int y0 = next.fetch_add(kBand); y0 < h; y0 = next.fetch_add(kBand))
+      run_rows(job, y0, std::min(h, y0 + kBand), cll[static_cast<std::size_t>(i)], scratch);
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(worker, i);
+  worker(0);
+  for (auto& th : pool) th.join();
   double max_nits = 0, sum = 0;
   for (const auto& c : cll) {
     max_nits = std::max(max_nits, c.max_nits);

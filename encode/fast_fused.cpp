@@ -52,26 +52,100 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
 HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) { return lut(df, r.signal, v); }
 
 // FloatBitsQuantizer::code for a vector: the bucket's code, plus one from the bucket's
-// boundary on. Negative and NaN-free input assumed below 0 (clamped to the first bucket).
-HWY_INLINE hn::Vec<DI> quantize(DF df, const QuantView& q, VF v) {
-  const DI di;
-  const DU du;
-  // Positive floats order as their bits; negative ones are negative as int32 (-> base).
-  const auto bits = hn::Max(hn::BitCast(di, v), hn::Set(di, static_cast<std::int32_t>(q.base_bits)));
-  const auto rel = hn::BitCast(du, hn::Min(hn::Sub(bits, hn::Set(di, static_cast<std::int32_t>(q.base_bits))),
-                                          hn::Set(di, static_cast<std::int32_t>(q.top_rel))));
-  const auto idx = hn::BitCast(di, hn::ShiftRightSame(rel, q.shift));
-  const auto e = hn::GatherIndex(du, q.table, idx);
-  const auto low = hn::And(rel, hn::Set(du, (1u << q.shift) - 1));
-  const auto code = hn::BitCast(di, hn::And(e, hn::Set(du, (1u << FloatBitsQuantizer::kCodeBits) - 1)));
-  const auto before = hn::Lt(hn::BitCast(di, low), hn::BitCast(di, hn::ShiftRight<FloatBitsQuantizer::kCodeBits>(e)));
-  (void)df;
-  return hn::IfThenElse(before, code, hn::Add(code, hn::Set(di, 1)));
-}
+// boundary on. Negative input lands in the first bucket; the constants are made once.
+struct Quantizer {
+  explicit Quantizer(const QuantView& q)
+      // Indexed by bits >> shift straight: the table's start moved back by the first
+      // bucket's index (bits below it are clamped up to it first).
+      : table(reinterpret_cast<const std::int32_t*>(reinterpret_cast<std::uintptr_t>(q.table) -
+                                                    (q.base_bits >> q.shift) * sizeof(std::uint32_t))),
+        lo_bits(hn::Set(DI(), static_cast<std::int32_t>(q.base_bits))),
+        hi_bits(hn::Set(DI(), static_cast<std::int32_t>(q.base_bits + q.top_rel))),
+        low_mask(hn::Set(DI(), static_cast<std::int32_t>((1u << q.shift) - 1))),
+        code_mask(hn::Set(DI(), (1 << FloatBitsQuantizer::kCodeBits) - 1)),
+        one(hn::Set(DI(), 1)),
+        shift(hn::Set(DU(), static_cast<std::uint32_t>(q.shift))) {}
+
+  HWY_INLINE hn::Vec<DI> operator()(VF v) const {
+    const DI di;
+    const DU du;
+    // Positive floats order as their bits; negative ones are negative as int32 (-> the first bucket).
+    const auto bits = hn::Min(hn::Max(hn::BitCast(di, v), lo_bits), hi_bits);
+    const auto e = hn::GatherIndex(di, table, hn::BitCast(di, hn::BitCast(du, bits) >> shift));
+    const auto low = hn::And(bits, low_mask);  // the bucket starts on a multiple of 2^shift
+    const auto code = hn::And(e, code_mask);
+    // The offset is the entry's top 17 bits: a logical shift (offsets below 2^16 + 1 compare as int).
+    const auto offset = hn::BitCast(di, hn::ShiftRight<FloatBitsQuantizer::kCodeBits>(hn::BitCast(du, e)));
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+    return hn::Vec<DI>{_mm512_mask_add_epi32(code.raw, _mm512_cmpge_epi32_mask(low.raw, offset.raw), code.raw, one.raw)};
+#else
+    return hn::IfThenElse(hn::Lt(low, offset), code, hn::Add(code, one));
+#endif
+  }
+
+  const std::int32_t* table;
+  hn::Vec<DI> lo_bits, hi_bits, low_mask, code_mask, one;
+  hn::Vec<DU> shift;
+};
+
+// Decoded light of codes for MaxFALL: on AVX-512 the per-32-code quartic in code % 32
+// (five two-table permutes instead of a 16-lane gather); elsewhere, and for MaxCLL, the
+// table itself.
+struct CodeLight {
+  explicit CodeLight(const FusedRow& r) : table(r.code_to_nits), poly(r.code_nits_poly) {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+    if (poly)
+      for (int i = 0; i < 5; ++i) {
+        lo[i] = _mm512_loadu_ps(poly + 32 * i);
+        hi[i] = _mm512_loadu_ps(poly + 32 * i + 16);
+      }
+#endif
+  }
+
+  HWY_INLINE VF operator()(DF df, hn::Vec<DI> code) const {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+    if (poly) {
+      const DI di;
+      const __m512i seg = hn::ShiftRight<5>(code).raw;
+      const VF t = hn::ConvertTo(df, hn::And(code, hn::Set(di, 31)));
+      VF v{_mm512_permutex2var_ps(lo[4], seg, hi[4])};
+      for (int i = 3; i >= 0; --i) v = hn::MulAdd(v, t, VF{_mm512_permutex2var_ps(lo[i], seg, hi[i])});
+      return v;
+    }
+#endif
+    return hn::GatherIndex(df, table, code);
+  }
+
+  const float* table;
+  const float* poly;
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  __m512 lo[5], hi[5];
+#endif
+};
 
 HWY_INLINE VF sanitize(DF df, VF v) {
   const VF c = hn::Min(hn::Max(v, hn::Set(df, -1e30f)), hn::Set(df, 1e30f));
   return hn::IfThenElseZero(hn::Eq(v, v), c);  // NaN -> 0
+}
+
+// IEEE half -> float. F16C where the target has it; elsewhere by bits, because Highway's
+// emulation turns NaN into Inf (and the documented rule treats them differently).
+template <class VU16>
+HWY_INLINE VF half_to_float(DF df, VU16 h16) {
+#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  return hn::PromoteTo(df, hn::BitCast(hn::Rebind<hwy::float16_t, DF>(), h16));
+#else
+  const DU du;
+  const DI di;
+  const auto h = hn::PromoteTo(du, h16);
+  const auto mag = hn::And(h, hn::Set(du, 0x7FFFu));
+  // Normal and subnormal halves: the bits moved into place, rescaled by 2^(127 - 15).
+  VF f = hn::Mul(hn::BitCast(df, hn::ShiftLeft<13>(mag)), hn::Set(df, 5.192296858534828e33f));
+  const auto inf_nan = hn::Gt(hn::BitCast(di, mag), hn::Set(di, 0x7BFF));
+  f = hn::IfThenElse(hn::RebindMask(df, inf_nan),
+                     hn::BitCast(df, hn::Or(hn::ShiftLeft<13>(mag), hn::Set(du, 0x7F800000u))), f);
+  return hn::Or(f, hn::BitCast(df, hn::ShiftLeft<16>(hn::And(h, hn::Set(du, 0x8000u)))));
+#endif
 }
 
 HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
@@ -89,12 +163,9 @@ HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
     B = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ib, hi)))};
 #else
     const hn::Rebind<std::uint16_t, DF> du16;
-    const hn::Rebind<hwy::float16_t, DF> dh;
     hn::Vec<decltype(du16)> r16, g16, b16, a16;
     hn::LoadInterleaved4(du16, r.half_in + static_cast<std::size_t>(x) * 4, r16, g16, b16, a16);
-    R = hn::PromoteTo(df, hn::BitCast(dh, r16));
-    G = hn::PromoteTo(df, hn::BitCast(dh, g16));
-    B = hn::PromoteTo(df, hn::BitCast(dh, b16));
+    R = half_to_float(df, r16), G = half_to_float(df, g16), B = half_to_float(df, b16);
 #endif
   } else {
     VF a;
@@ -175,7 +246,9 @@ HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, int x, VF& R, VF& G,
   return ok;
 }
 
-void FusedRowImpl(FusedRow& r) {
+// The kernel works on a local copy of the row's parameters: stores to the output cannot
+// alias it, so loop-invariant fields need not be reloaded per vector.
+HWY_INLINE void FusedRowLocal(FusedRow& r) {
   const DF df;
   const DU du;
   const DI di;
@@ -207,6 +280,9 @@ void FusedRowImpl(FusedRow& r) {
     // dependency chain than the whole (tone gathers, signal gathers, the content-light
     // gather), so more iterations overlap in the out-of-order window. kChunk is a multiple
     // of every target's lane count.
+    const Quantizer quantize(r.codes);
+    const CodeLight code_light(r);
+    auto vmax_code = hn::Zero(di);
     constexpr int kChunk = 512;
     alignas(64) float buf_r[kChunk], buf_g[kChunk], buf_b[kChunk], buf_ok[kChunk];
     const VF one = hn::Set(df, 1.0f), zero = hn::Zero(df);
@@ -228,7 +304,7 @@ void FusedRowImpl(FusedRow& r) {
         auto code_of = [&](VF e) { return hn::Min(hn::ConvertTo(di, hn::MulAdd(e, scale, bias)), max_code); };
         hn::Vec<DI> cr, cg, cb;
         if (r.codes.table) {
-          cr = quantize(df, r.codes, R), cg = quantize(df, r.codes, G), cb = quantize(df, r.codes, B);
+          cr = quantize(R), cg = quantize(G), cb = quantize(B);
         } else {
           cr = code_of(e_of(R)), cg = code_of(e_of(G)), cb = code_of(e_of(B));
         }
@@ -255,18 +331,27 @@ void FusedRowImpl(FusedRow& r) {
                                 r.signal16 + static_cast<std::size_t>(x) * 3);
         }
         if (r.code_to_nits) {
-          const auto cmax = hn::Max(hn::Max(cr, cg), cb);
-          VF m = hn::GatherIndex(df, r.code_to_nits, cmax);
-          if (r.gamut_check) m = hn::IfThenElseZero(hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero), m);
-          vmax = hn::Max(vmax, m);
-          vsum = hn::Add(vsum, m);
+          // MaxCLL from the largest code (decoded once, below), MaxFALL from each pixel's.
+          auto cmax = hn::Max(hn::Max(cr, cg), cb);
+          if (r.gamut_check)  // pixels left for the exact path are counted there
+            cmax = hn::IfThenElseZero(hn::RebindMask(di, hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero)), cmax);
+          vmax_code = hn::Max(vmax_code, cmax);
+          vsum = hn::Add(vsum, code_light(df, cmax));
         }
       }
     }
+    if (r.code_to_nits)
+      r.max_nits = std::max<double>(r.max_nits, r.code_to_nits[hn::GetLane(hn::MaxOfLanes(di, vmax_code))]);
   }
   r.done = n_full;
   r.max_nits = std::max<double>(r.max_nits, hn::GetLane(hn::MaxOfLanes(df, vmax)));
   r.sum_nits += hn::GetLane(hn::SumOfLanes(df, vsum));
+}
+
+void FusedRowImpl(FusedRow& row) {
+  FusedRow r = row;
+  FusedRowLocal(r);
+  row = r;
 }
 
 }  // namespace HWY_NAMESPACE

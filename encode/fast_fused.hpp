@@ -52,6 +52,9 @@ struct FusedRow {
   std::uint8_t* out = nullptr;         // row start
   std::uint16_t* signal16 = nullptr;   // row start or null
   const float* code_to_nits = nullptr; // MaxCLL from decoded codes (hdr10), or null
+  // MaxFALL: code_to_nits as a quartic in code % 32 per 32 codes, 5 x 32 floats
+  // (coefficient i of segment s at [32 i + s]), or null (then the table itself).
+  const float* code_nits_poly = nullptr;
   // results
   double max_nits = 0, sum_nits = 0;   // CLL of the pixels handled here
   int* fallback = nullptr;             // capacity n: x of pixels left for the exact path

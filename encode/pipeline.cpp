@@ -109,6 +109,51 @@ ToneStage build_tone_stage(const PreparedPipeline& p) {
   return s;
 }
 
+namespace {
+// SignalStage::code_nits_poly from code_to_nits (normal equations of a degree-4 fit on
+// the 32 codes of each segment; x in [0, 1) keeps them well conditioned).
+void fit_code_light(SignalStage& s) {
+  constexpr int kDegree = 4, kSegment = 32;
+  const int segments = static_cast<int>(s.code_to_nits.size()) / kSegment;
+  s.code_nits_poly.assign(static_cast<std::size_t>((kDegree + 1) * segments), 0.0f);
+  s.code_nits_poly_error = 0;
+  for (int seg = 0; seg < segments; ++seg) {
+    double a[kDegree + 1][kDegree + 2] = {};
+    for (int t = 0; t < kSegment; ++t) {
+      const double x = t / static_cast<double>(kSegment), y = s.code_to_nits[static_cast<std::size_t>(seg * kSegment + t)];
+      double p[kDegree + 1] = {1};
+      for (int i = 1; i <= kDegree; ++i) p[i] = p[i - 1] * x;
+      for (int i = 0; i <= kDegree; ++i) {
+        for (int j = 0; j <= kDegree; ++j) a[i][j] += p[i] * p[j];
+        a[i][kDegree + 1] += p[i] * y;
+      }
+    }
+    for (int i = 0; i <= kDegree; ++i) {  // Gauss-Jordan with partial pivoting
+      int pivot = i;
+      for (int r = i + 1; r <= kDegree; ++r)
+        if (std::abs(a[r][i]) > std::abs(a[pivot][i])) pivot = r;
+      std::swap(a[i], a[pivot]);
+      for (int r = 0; r <= kDegree; ++r)
+        if (r != i) {
+          const double f = a[r][i] / a[i][i];
+          for (int c = i; c <= kDegree + 1; ++c) a[r][c] -= f * a[i][c];
+        }
+    }
+    // Fitted in t / 32, stored for t.
+    for (int i = 0; i <= kDegree; ++i)
+      s.code_nits_poly[static_cast<std::size_t>(i * segments + seg)] =
+          static_cast<float>(a[i][kDegree + 1] / a[i][i] / std::pow(kSegment, i));
+    for (int t = 0; t < kSegment; ++t) {
+      const float x = static_cast<float>(t);
+      float v = s.code_nits_poly[static_cast<std::size_t>(kDegree * segments + seg)];
+      for (int i = kDegree - 1; i >= 0; --i) v = std::fma(v, x, s.code_nits_poly[static_cast<std::size_t>(i * segments + seg)]);
+      s.code_nits_poly_error = std::max(
+          s.code_nits_poly_error, std::abs(static_cast<double>(v) - s.code_to_nits[static_cast<std::size_t>(seg * kSegment + t)]));
+    }
+  }
+}
+}  // namespace
+
 SignalStage build_signal_stage(const DisplayTarget& t) {
   SignalStage s;
   s.mode = t.mode;
@@ -171,6 +216,12 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
       s.code_to_nits[static_cast<std::size_t>(c)] =
           static_cast<float>(t.mode == Mode::hdr10 ? transfer::pq_eotf(e) : transfer::hlg_inverse_oetf(e));
     }
+  }
+  if (t.mode == Mode::hdr10 && s.max_code == 1023) {
+    fit_code_light(s);
+    // Narrow range clamps below code 64 and above 940: a kink inside a segment no quartic
+    // follows, so such a table stays a table.
+    if (s.code_nits_poly_error > kCodeLightFitTolerance) s.code_nits_poly.clear();
   }
   return s;
 }

@@ -36,7 +36,15 @@ struct SignalStage {
   int max_code = 1023;
   float hlg_peak = 1000, hlg_gamma = 1.2f;
   std::vector<float> code_to_nits;  // for MaxCLL/MaxFALL: decoded display light per code
+  // HDR10 at 10 bits: code_to_nits as a least-squares quartic per 32 codes in
+  // t = code % 32, coefficient i of segment s at [32 i + s] (the SIMD MaxFALL sum), and
+  // its largest error over all codes, evaluated in float as the kernel does; empty when
+  // that error is above kCodeLightFitTolerance.
+  std::vector<float> code_nits_poly;
+  double code_nits_poly_error = 0;
 };
+// The largest error of code_nits_poly kept (nits): MaxFALL is reported in whole nits.
+inline constexpr double kCodeLightFitTolerance = 1e-3;
 
 ToneStage build_tone_stage(const PreparedPipeline& p);
 SignalStage build_signal_stage(const DisplayTarget& t);
