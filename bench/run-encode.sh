@@ -3,7 +3,8 @@
 # its last line, one JSON object:
 #   {"hdr10": {...}, "sdr": {...}, "scrgb": {...}}
 # each with floor_ms, ocio_ms, hdrd_ms_1t, hdrd_ms_2t, max_code_error, pct_off_by_one
-# (medians of the repetitions), plus the ratios the targets are stated in.
+# (medians of the repetitions), plus the ratios the targets are stated in, and for hdr10
+# and sdr zimg's times in the same run (zimg_ms_1t/2t, its code error, x_faster_than_zimg_2t).
 # env: BUILD_DIR (default build-release), REPS (default 5)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,6 +42,20 @@ for mode in ("hdr10", "sdr", "scrgb"):
         "x_faster_than_ocio_1t": round(ocio / t1, 1),
         "x_of_floor_2t": round(t2 / median("BM_floor/%d/real_time" % (8 if mode == "scrgb" else 4)), 2),
     }
+# zimg (zscale) in its fast mode (approximate gamma), the one the 2-thread target names;
+# absent when the benchmark was built without libzimg-dev.
+for mode in ("hdr10", "sdr"):
+    try:
+        z1 = median("BM_zimg_%s/1/1/real_time" % mode)
+        z2 = median("BM_zimg_%s/2/1/real_time" % mode)
+    except SystemExit:
+        continue
+    result[mode].update({
+        "zimg_ms_1t": round(z1, 2), "zimg_ms_2t": round(z2, 2),
+        "zimg_max_code_error": counter("BM_zimg_%s/1/1" % mode, "max_code_error"),
+        "zimg_pct_off": round(counter("BM_zimg_%s/1/1" % mode, "pct_off"), 4),
+        "x_faster_than_zimg_2t": round(z2 / result[mode]["hdrd_ms_2t"], 2),
+    })
 ui1 = median("BM_hdrd_hdr10_ui/1/real_time"); ui2 = median("BM_hdrd_hdr10_ui/2/real_time")
 result["hdr10"]["hdrd_ui_ms_1t"] = round(ui1, 2)
 result["hdr10"]["hdrd_ui_ms_2t"] = round(ui2, 2)
