@@ -173,14 +173,24 @@ HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
   }
 }
 
-HWY_INLINE void matrix(DF df, const float* m, VF& r, VF& g, VF& b) {
+// A 3x3 matrix as nine splatted vectors, made once per row: in the loop each coefficient
+// is a register or a full-vector memory operand, never a broadcast on the shuffle port.
+struct MatV {
+  MatV() = default;
+  explicit MatV(const float* m) {
+    for (int i = 0; i < 9; ++i) v[i] = hn::Set(DF(), m ? m[i] : 0.0f);
+  }
+  VF v[9];
+};
+
+HWY_INLINE void matrix(const MatV& m, VF& r, VF& g, VF& b) {
   const VF x = r, y = g, z = b;
-  r = hn::MulAdd(hn::Set(df, m[0]), x, hn::MulAdd(hn::Set(df, m[1]), y, hn::Mul(hn::Set(df, m[2]), z)));
-  g = hn::MulAdd(hn::Set(df, m[3]), x, hn::MulAdd(hn::Set(df, m[4]), y, hn::Mul(hn::Set(df, m[5]), z)));
-  b = hn::MulAdd(hn::Set(df, m[6]), x, hn::MulAdd(hn::Set(df, m[7]), y, hn::Mul(hn::Set(df, m[8]), z)));
+  r = hn::MulAdd(m.v[0], x, hn::MulAdd(m.v[1], y, hn::Mul(m.v[2], z)));
+  g = hn::MulAdd(m.v[3], x, hn::MulAdd(m.v[4], y, hn::Mul(m.v[5], z)));
+  b = hn::MulAdd(m.v[6], x, hn::MulAdd(m.v[7], y, hn::Mul(m.v[8], z)));
 }
 
-HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
+HWY_INLINE void tone(DF df, const FusedRow& r, const MatV& m_container, VF& R, VF& G, VF& B) {
   const VF zero = hn::Zero(df);
   R = hn::Max(R, zero), G = hn::Max(G, zero), B = hn::Max(B, zero);
   switch (r.tone) {
@@ -200,7 +210,7 @@ HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
       if (r.tone == FusedTone::ratio_max && r.m_container) {
         // The largest channel in the output container too, so no output channel passes the peak.
         VF cr = R, cg = G, cb = B;
-        matrix(df, r.m_container, cr, cg, cb);
+        matrix(m_container, cr, cg, cb);
         k = hn::Max(k, hn::Max(hn::Max(cr, cg), cb));
       }
       // k >= 0; at 0 the table's bottom ratio leaves the black pixel black.
@@ -216,16 +226,22 @@ HWY_INLINE void tone(DF df, const FusedRow& r, VF& R, VF& G, VF& B) {
 
 // Container light of pixels [x, x + N) (tone, container matrix, UI), with the mask of
 // those that stayed inside the display gamut (the rest are listed for the exact path).
-HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, int x, VF& R, VF& G, VF& B, VF& work_max) {
+struct RowMats {
+  explicit RowMats(const FusedRow& r) : in(r.m_in), container(r.m_container) {}
+  MatV in, container;
+};
+
+HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, const RowMats& m, int x, VF& R, VF& G, VF& B,
+                                        VF& work_max) {
   const int N = static_cast<int>(hn::Lanes(df));
   load_rgb(df, r, x, R, G, B);
   // Finite halves are far inside +-1e30: only NaN and Inf need the documented rule.
   if (!r.half_in || !hn::AllTrue(df, hn::IsFinite(hn::Add(hn::Add(R, G), B))))
     R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
-  matrix(df, r.m_in, R, G, B);
-  tone(df, r, R, G, B);
+  matrix(m.in, R, G, B);
+  tone(df, r, m.container, R, G, B);
   work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
-  if (r.m_container) matrix(df, r.m_container, R, G, B);
+  if (r.m_container) matrix(m.container, R, G, B);
   auto ok = hn::FirstN(df, N);
   if (r.gamut_check) {
     const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
@@ -257,6 +273,7 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
   const auto max_code = hn::Set(di, r.max_code);
   auto vmax = hn::Zero(df);
   auto vsum = hn::Zero(df);  // per-lane sums of at most n / N values: float is enough
+  const RowMats mats(r);
   const int n_full = r.n - r.n % N;
 
   if (r.out_kind == FusedOut::scrgb) {
@@ -265,7 +282,7 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
     const VF k80 = hn::Set(df, 1.0f / 80.0f);
     for (int x = 0; x < n_full; x += N) {
       VF R, G, B, work_max;
-      const auto ok = container_light(df, r, x, R, G, B, work_max);
+      const auto ok = container_light(df, r, mats, x, R, G, B, work_max);
       const auto h_r = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(R, k80)));
       const auto h_g = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(G, k80)));
       const auto h_b = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(B, k80)));
@@ -290,7 +307,7 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
       const int x1 = std::min(n_full, x0 + kChunk);
       for (int x = x0; x < x1; x += N) {
         VF R, G, B, work_max;
-        const auto ok = container_light(df, r, x, R, G, B, work_max);
+        const auto ok = container_light(df, r, mats, x, R, G, B, work_max);
         hn::Store(R, df, buf_r + (x - x0));
         hn::Store(G, df, buf_g + (x - x0));
         hn::Store(B, df, buf_b + (x - x0));
