@@ -5,14 +5,17 @@
 # each with floor_ms, ocio_ms, hdrd_ms_1t, hdrd_ms_2t, max_code_error, pct_off_by_one
 # (medians of the repetitions), plus the ratios the targets are stated in, and for hdr10
 # and sdr zimg's times in the same run (zimg_ms_1t/2t, its code error, x_faster_than_zimg_2t).
-# env: BUILD_DIR (default build-release), REPS (default 5)
+# env: BUILD_DIR (default build-release), REPS (default 7)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
 BUILD_DIR=$build_dir BUILD_TYPE=Release bash scripts/build.sh -DHDRD_BUILD_TESTS=OFF >/dev/null
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-"$build_dir/bench/bench_encode" --benchmark_repetitions="${REPS:-5}" --benchmark_report_aggregates_only=true \
+# Repetitions run in random order across the benchmarks, so a slow spell of the machine
+# does not fall on one side of a comparison.
+"$build_dir/bench/bench_encode" --benchmark_repetitions="${REPS:-7}" --benchmark_report_aggregates_only=true \
+  --benchmark_enable_random_interleaving=true \
   --benchmark_format=json --benchmark_out="$out" --benchmark_out_format=json >&2
 python3 - "$out" <<'PY'
 import json, sys

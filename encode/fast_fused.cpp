@@ -148,8 +148,40 @@ HWY_INLINE VF half_to_float(DF df, VU16 h16) {
 #endif
 }
 
-HWY_INLINE void load_rgb(DF df, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
-  if (r.half_in) {
+// What shapes a row's loops: fixed at compile time for the common HDR10 frame (half
+// input, ratio of max(RGB) into a Rec.2020 container, exact codes, MaxFALL), read from the
+// row otherwise. The fixed instance has no per-vector tests of the row's options.
+struct RuntimeSpec {
+  const FusedRow* r;
+  bool half() const { return r->half_in != nullptr; }
+  FusedTone tone() const { return r->tone; }
+  bool container() const { return r->m_container != nullptr; }
+  bool gamut() const { return r->gamut_check; }
+  FusedOut out() const { return r->out_kind; }
+  bool quant() const { return r->codes.table != nullptr; }
+  bool cll() const { return r->code_to_nits != nullptr; }
+  bool signal16() const { return r->signal16 != nullptr; }
+};
+
+struct Hdr10Spec {
+  static constexpr bool half() { return true; }
+  static constexpr FusedTone tone() { return FusedTone::ratio_max; }
+  static constexpr bool container() { return false; }
+  static constexpr bool gamut() { return false; }
+  static constexpr FusedOut out() { return FusedOut::packed10; }
+  static constexpr bool quant() { return true; }
+  static constexpr bool cll() { return true; }
+  static constexpr bool signal16() { return false; }
+  static bool matches(const FusedRow& r) {
+    const RuntimeSpec s{&r};
+    return s.half() == half() && s.tone() == tone() && s.container() == container() && s.gamut() == gamut() &&
+           s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16();
+  }
+};
+
+template <class Spec>
+HWY_INLINE void load_rgb(DF df, const Spec& spec, const FusedRow& r, int x, VF& R, VF& G, VF& B) {
+  if (spec.half()) {
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
     // 16 RGBA half pixels are two vectors; one word permute per channel gathers its 16 values.
     const __m512i lo = _mm512_loadu_si512(r.half_in + static_cast<std::size_t>(x) * 4);
@@ -190,10 +222,11 @@ HWY_INLINE void matrix(const MatV& m, VF& r, VF& g, VF& b) {
   b = hn::MulAdd(m.v[6], x, hn::MulAdd(m.v[7], y, hn::Mul(m.v[8], z)));
 }
 
-HWY_INLINE void tone(DF df, const FusedRow& r, const MatV& m_container, VF& R, VF& G, VF& B) {
+template <class Spec>
+HWY_INLINE void tone(DF df, const Spec& spec, const FusedRow& r, const MatV& m_container, VF& R, VF& G, VF& B) {
   const VF zero = hn::Zero(df);
   R = hn::Max(R, zero), G = hn::Max(G, zero), B = hn::Max(B, zero);
-  switch (r.tone) {
+  switch (spec.tone()) {
     case FusedTone::clip: {
       const VF pw = hn::Set(df, r.paper_white), pk = hn::Set(df, r.peak);
       R = hn::Min(hn::Mul(R, pw), pk), G = hn::Min(hn::Mul(G, pw), pk), B = hn::Min(hn::Mul(B, pw), pk);
@@ -203,11 +236,11 @@ HWY_INLINE void tone(DF df, const FusedRow& r, const MatV& m_container, VF& R, V
       R = lut(df, r.tone_lut, R), G = lut(df, r.tone_lut, G), B = lut(df, r.tone_lut, B);
       break;
     default: {
-      VF k = r.tone == FusedTone::ratio_max
+      VF k = spec.tone() == FusedTone::ratio_max
                        ? hn::Max(hn::Max(R, G), B)
                        : hn::MulAdd(hn::Set(df, 0.2627f), R,
                                     hn::MulAdd(hn::Set(df, 0.6780f), G, hn::Mul(hn::Set(df, 0.0593f), B)));
-      if (r.tone == FusedTone::ratio_max && r.m_container) {
+      if (spec.tone() == FusedTone::ratio_max && spec.container()) {
         // The largest channel in the output container too, so no output channel passes the peak.
         VF cr = R, cg = G, cb = B;
         matrix(m_container, cr, cg, cb);
@@ -231,19 +264,20 @@ struct RowMats {
   MatV in, container;
 };
 
-HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, const RowMats& m, int x, VF& R, VF& G, VF& B,
-                                        VF& work_max) {
+template <class Spec>
+HWY_INLINE hn::Mask<DF> container_light(DF df, const Spec& spec, FusedRow& r, const RowMats& m, int x, VF& R, VF& G,
+                                        VF& B, VF& work_max) {
   const int N = static_cast<int>(hn::Lanes(df));
-  load_rgb(df, r, x, R, G, B);
+  load_rgb(df, spec, r, x, R, G, B);
   // Finite halves are far inside +-1e30: only NaN and Inf need the documented rule.
-  if (!r.half_in || !hn::AllTrue(df, hn::IsFinite(hn::Add(hn::Add(R, G), B))))
+  if (!spec.half() || !hn::AllTrue(df, hn::IsFinite(hn::Add(hn::Add(R, G), B))))
     R = sanitize(df, R), G = sanitize(df, G), B = sanitize(df, B);
   matrix(m.in, R, G, B);
-  tone(df, r, m.container, R, G, B);
+  tone(df, spec, r, m.container, R, G, B);
   work_max = hn::Max(hn::Max(R, G), B);  // Rec.2020 nits: the CLL of scRGB
-  if (r.m_container) matrix(m.container, R, G, B);
+  if (spec.container()) matrix(m.container, R, G, B);
   auto ok = hn::FirstN(df, N);
-  if (r.gamut_check) {
+  if (spec.gamut()) {
     const VF lo = hn::Set(df, r.gamut_lo), hi = hn::Set(df, r.gamut_hi);
     ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
                  hn::And(hn::Le(G, hi), hn::Le(B, hi)));
@@ -264,7 +298,8 @@ HWY_INLINE hn::Mask<DF> container_light(DF df, FusedRow& r, const RowMats& m, in
 
 // The kernel works on a local copy of the row's parameters: stores to the output cannot
 // alias it, so loop-invariant fields need not be reloaded per vector.
-HWY_INLINE void FusedRowLocal(FusedRow& r) {
+template <class Spec>
+HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
   const DF df;
   const DU du;
   const DI di;
@@ -276,13 +311,13 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
   const RowMats mats(r);
   const int n_full = r.n - r.n % N;
 
-  if (r.out_kind == FusedOut::scrgb) {
+  if (spec.out() == FusedOut::scrgb) {
     const hn::Rebind<std::uint16_t, DF> du16;
     const hn::Rebind<hwy::float16_t, DF> dh;
     const VF k80 = hn::Set(df, 1.0f / 80.0f);
     for (int x = 0; x < n_full; x += N) {
       VF R, G, B, work_max;
-      const auto ok = container_light(df, r, mats, x, R, G, B, work_max);
+      const auto ok = container_light(df, spec, r, mats, x, R, G, B, work_max);
       const auto h_r = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(R, k80)));
       const auto h_g = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(G, k80)));
       const auto h_b = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(B, k80)));
@@ -307,11 +342,11 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
       const int x1 = std::min(n_full, x0 + kChunk);
       for (int x = x0; x < x1; x += N) {
         VF R, G, B, work_max;
-        const auto ok = container_light(df, r, mats, x, R, G, B, work_max);
+        const auto ok = container_light(df, spec, r, mats, x, R, G, B, work_max);
         hn::Store(R, df, buf_r + (x - x0));
         hn::Store(G, df, buf_g + (x - x0));
         hn::Store(B, df, buf_b + (x - x0));
-        if (r.gamut_check) hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
+        if (spec.gamut()) hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
       }
       for (int x = x0; x < x1; x += N) {
         const VF R = hn::Load(df, buf_r + (x - x0)), G = hn::Load(df, buf_g + (x - x0)), B = hn::Load(df, buf_b + (x - x0));
@@ -320,13 +355,13 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
         auto e_of = [&](VF v) { return hn::Min(hn::Max(signal(df, r, v), zero), one); };
         auto code_of = [&](VF e) { return hn::Min(hn::ConvertTo(di, hn::MulAdd(e, scale, bias)), max_code); };
         hn::Vec<DI> cr, cg, cb;
-        if (r.codes.table) {
+        if (spec.quant()) {
           cr = quantize(R), cg = quantize(G), cb = quantize(B);
         } else {
           cr = code_of(e_of(R)), cg = code_of(e_of(G)), cb = code_of(e_of(B));
         }
         auto* out32 = reinterpret_cast<std::uint32_t*>(r.out) + x;
-        if (r.out_kind == FusedOut::xrgb8) {
+        if (spec.out() == FusedOut::xrgb8) {
           const auto w = hn::Or(hn::Or(hn::BitCast(du, cb), hn::ShiftLeft<8>(hn::BitCast(du, cg))),
                                 hn::Or(hn::ShiftLeft<16>(hn::BitCast(du, cr)), hn::Set(du, 0xFF000000u)));
           hn::StoreU(w, du, out32);
@@ -335,7 +370,7 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
         const auto w = hn::Or(hn::Or(hn::BitCast(du, cr), hn::ShiftLeft<10>(hn::BitCast(du, cg))),
                               hn::Or(hn::ShiftLeft<20>(hn::BitCast(du, cb)), hn::Set(du, 3u << 30)));
         hn::StoreU(w, du, out32);
-        if (r.signal16) {
+        if (spec.signal16()) {
           // PNG samples: round(E' 65535), or the narrow code scaled to 16 bits.
           const hn::Rebind<std::uint16_t, DF> du16;
           const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
@@ -347,17 +382,17 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
           hn::StoreInterleaved3(s16(R, cr), s16(G, cg), s16(B, cb), du16,
                                 r.signal16 + static_cast<std::size_t>(x) * 3);
         }
-        if (r.code_to_nits) {
+        if (spec.cll()) {
           // MaxCLL from the largest code (decoded once, below), MaxFALL from each pixel's.
           auto cmax = hn::Max(hn::Max(cr, cg), cb);
-          if (r.gamut_check)  // pixels left for the exact path are counted there
+          if (spec.gamut())  // pixels left for the exact path are counted there
             cmax = hn::IfThenElseZero(hn::RebindMask(di, hn::Ne(hn::Load(df, buf_ok + (x - x0)), zero)), cmax);
           vmax_code = hn::Max(vmax_code, cmax);
           vsum = hn::Add(vsum, code_light(df, cmax));
         }
       }
     }
-    if (r.code_to_nits)
+    if (spec.cll())
       r.max_nits = std::max<double>(r.max_nits, r.code_to_nits[hn::GetLane(hn::MaxOfLanes(di, vmax_code))]);
   }
   r.done = n_full;
@@ -367,7 +402,8 @@ HWY_INLINE void FusedRowLocal(FusedRow& r) {
 
 void FusedRowImpl(FusedRow& row) {
   FusedRow r = row;
-  FusedRowLocal(r);
+  if (Hdr10Spec::matches(r)) FusedRowLocal(Hdr10Spec(), r);
+  else FusedRowLocal(RuntimeSpec{&r}, r);
   row = r;
 }
 
