@@ -204,9 +204,9 @@ struct FrameJob {
   Mat3f m_in{Mat3::identity()};
   Mat3f to_c{Mat3::identity()};
   bool container_is_working = true;
-  EncodedFrame* frame;
+  EncodedFrame* frame = nullptr;
   int width = 0;
-  std::optional<kernels::FusedRow> fused;  // the fused SIMD kernel's template, when eligible
+  std::optional<kernels::FusedRow> fused = std::nullopt;  // the fused SIMD kernel's template, when eligible
   bool fused_ui = false;                   // ... and it composites the UI too (linear blending, not scRGB)
 };
 
