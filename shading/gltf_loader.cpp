@@ -94,8 +94,8 @@ bool no_write(std::string*, const std::string&, const std::vector<unsigned char>
 // ---- Checks tinygltf 2.7.0 skips ----------------------------------------------------------
 // It hands an image's bufferView to the image decoder without checking that the view
 // lies inside its buffer: a view past the end of a shorter buffer made stb_image read
-// past the heap block (found by tests/fuzz/gltf_fuzz.cpp, corpus file
-// tinygltf-image-view-past-buffer.glb). So bufferView ranges are checked against the
+// past the heap block (found by tests/fuzz/gltf_fuzz.cpp; the .gltf and .glb forms are
+// cases of Gltf.MalformedInputGivesClearErrors). So bufferView ranges are checked against the
 // buffers' byteLength (which tinygltf does enforce on the data) before it runs.
 std::optional<std::string_view> gltf_json_text(std::span<const std::uint8_t> bytes) {
   if (bytes.size() < 4 || std::memcmp(bytes.data(), "glTF", 4) != 0)

@@ -213,6 +213,16 @@ TEST(Gltf, NormalTangentTestNormalMapsLightLikeTheGeometry) {
   EXPECT_GE(mapped, 10);
 }
 
+// A binary glTF (GLB 2) of a JSON chunk and a BIN chunk, each padded to 4 bytes.
+std::string glb(std::string json, std::string bin) {
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  bin.resize((bin.size() + 3) / 4 * 4, '\0');
+  auto u32 = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };  // little-endian host
+  return "glTF" + u32(2) + u32(static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size())) +
+         u32(static_cast<std::uint32_t>(json.size())) + "JSON" + json + u32(static_cast<std::uint32_t>(bin.size())) +
+         std::string("BIN\0", 4) + bin;
+}
+
 TEST(Gltf, MalformedInputGivesClearErrors) {
   const auto load = [](std::string_view text) {
     return load_gltf_memory({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}, "", SceneLoadOptions{});
@@ -238,6 +248,12 @@ TEST(Gltf, MalformedInputGivesClearErrors) {
   // A buffer view past the end of its buffer (tinygltf 2.7.0 would hand it to stb_image).
   r = load(R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}],
     "bufferViews":[{"buffer":0,"byteOffset":8,"byteLength":8}],"images":[{"bufferView":0,"mimeType":"image/png"}]})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("outside buffer 0"), std::string::npos) << r.error().message;
+  // The same in a GLB, whose buffer 0 is the binary chunk (the form fuzzing found it in).
+  r = load(glb(R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":12}],
+    "bufferViews":[{"buffer":0,"byteOffset":8,"byteLength":8}],"images":[{"bufferView":0,"mimeType":"image/png"}]})",
+               std::string(12, '\0')));
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("outside buffer 0"), std::string::npos) << r.error().message;
   // A node cycle.
