@@ -3,7 +3,8 @@
 # its last line, one JSON object:
 #   {"hdr10": {...}, "sdr": {...}, "scrgb": {...}}
 # each with floor_ms, ocio_ms, hdrd_ms_1t, hdrd_ms_2t, max_code_error, pct_off_by_one
-# (medians of the repetitions), plus the ratios the targets are stated in, and for hdr10
+# (medians of the repetitions; floor_ms is the 1-thread floor, floor_ms_2t the 2-thread
+# one), plus the ratios the targets are stated in, and for hdr10
 # and sdr zimg's times in the same run (zimg_ms_1t/2t, its code error, x_faster_than_zimg_2t).
 # env: BUILD_DIR (default build-release), REPS (default 7)
 set -euo pipefail
@@ -33,17 +34,21 @@ def counter(name, key):
     return None
 result = {}
 for mode in ("hdr10", "sdr", "scrgb"):
-    floor = median("BM_floor/%d/real_time" % (8 if mode == "scrgb" else 4))
+    out_bytes = 8 if mode == "scrgb" else 4
+    floor = median("BM_floor/%d/1/real_time" % out_bytes)
+    floor2 = median("BM_floor/%d/2/real_time" % out_bytes)
     ocio = median("BM_ocio_%s/real_time" % mode)
     t1 = median("BM_hdrd_%s/1/real_time" % mode)
     t2 = median("BM_hdrd_%s/2/real_time" % mode)
     result[mode] = {
-        "floor_ms": round(floor, 2), "ocio_ms": round(ocio, 2),
+        "floor_ms": round(floor, 2), "floor_ms_2t": round(floor2, 2), "ocio_ms": round(ocio, 2),
         "hdrd_ms_1t": round(t1, 2), "hdrd_ms_2t": round(t2, 2),
         "max_code_error": counter("BM_accuracy_" + mode, "max_code_error"),
         "pct_off_by_one": round(counter("BM_accuracy_" + mode, "pct_off_by_one"), 4),
         "x_faster_than_ocio_1t": round(ocio / t1, 1),
-        "x_of_floor_2t": round(t2 / median("BM_floor/%d/real_time" % (8 if mode == "scrgb" else 4)), 2),
+        # each thread count against the floor at the same thread count
+        "x_of_floor_1t": round(t1 / floor, 2),
+        "x_of_floor_2t": round(t2 / floor2, 2),
     }
 # zimg (zscale) in its fast mode (approximate gamma), the one the 2-thread target names;
 # absent when the benchmark was built without libzimg-dev.

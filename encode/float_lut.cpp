@@ -19,6 +19,10 @@ FloatBitsLut::FloatBitsLut(const std::function<double(double)>& f, int min_exp2,
     pairs_[2 * i] = table_[i];
     pairs_[2 * i + 1] = table_[i + 1] - table_[i];
   }
+  // Buckets 0 .. j - 1 hold table_[0] at both ends (a zero step): flat up to bucket j.
+  std::size_t j = 0;
+  while (j < n && table_[j + 1] == table_[0]) ++j;
+  if (j > 0) flat_below_ = j < n ? std::bit_cast<float>(base_bits_ + static_cast<std::uint32_t>(j << kShift)) : hi_;
 }
 
 FloatBitsQuantizer::FloatBitsQuantizer(const std::function<int(double)>& code, int min_exp2, int max_exp2) {

@@ -43,12 +43,18 @@ class FloatBitsLut {
   // fetches both ends of a bucket (SIMD code).
   const std::vector<float>& pairs() const { return pairs_; }
   std::uint32_t base_bits() const { return base_bits_; }
+  // Where the table is flat from its bottom: every v below flat_below() (negative, NaN
+  // and below lo() included) looks up exactly table().front(), with no interpolation
+  // step. 0 when the first bucket already slopes. A curve that is linear below a knee
+  // (a ratio table that is constant there) lets SIMD code skip the lookup below it.
+  float flat_below() const { return flat_below_; }
 
  private:
   std::vector<float> table_;
   std::vector<float> pairs_;
   std::uint32_t base_bits_ = 0;
   float lo_ = 0, hi_ = 0;
+  float flat_below_ = 0;
 };
 
 // A monotonic float -> integer code function, tabulated exactly: every bucket of the

@@ -14,6 +14,7 @@
 #include <random>
 
 #include "encode/float_lut.hpp"
+#include "encode/tonemap_curves.hpp"
 #include "encode/transfer.hpp"
 
 using namespace hdrd;
@@ -126,6 +127,44 @@ TEST(FloatBitsQuantizer, RefusesWhatItCannotTabulate) {
                   .empty());
   // Codes that do not fit the entry.
   EXPECT_TRUE(FloatBitsQuantizer([](double x) { return x >= 1 ? 1 << 16 : (1 << 16) - 1; }, -20, 14).empty());
+}
+
+// flat_below(): where a table is flat from its bottom, the SIMD kernel skips the lookup
+// and uses table().front(). That must be the lookup's exact result for every float below
+// it, and the table must not be flat any further.
+TEST(FloatBitsLut, FlatBelowIsExactlyWhereTheTableIsFlat) {
+  // pq-shoulder's ratio (nits out per relative unit in): paper white up to the knee, then
+  // rolling off into the peak.
+  const double pw = 203;
+  const tonemap::detail::PqShoulder shoulder(1000, pw, 0.5);
+  const FloatBitsLut ratio([&](double m) { return shoulder.map_nits(m * pw) / m; }, -20, 20);
+  const float knee = static_cast<float>(transfer::pq_eotf(shoulder.e_knee) / pw);
+  const float flat = ratio.flat_below();
+  EXPECT_EQ(ratio.table().front(), static_cast<float>(pw));
+  // The table's grid (128 points per octave) ends the flat part at the last grid point
+  // at or below the knee.
+  EXPECT_LE(flat, knee);
+  EXPECT_GT(flat, knee * 0.99f);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> log2_x(-40, std::log2(flat));
+  for (int i = 0; i < 100000; ++i) {
+    const float x = static_cast<float>(std::exp2(log2_x(rng)));
+    if (x < flat) {
+      ASSERT_EQ(ratio(x), ratio.table().front()) << x;
+    }
+  }
+  for (float x : {0.0f, -0.0f, -1.0f, std::numeric_limits<float>::denorm_min(), std::nextafter(flat, 0.0f)})
+    EXPECT_EQ(ratio(x), ratio.table().front()) << x;
+  // Just past it the curve bends: some value in the next bucket differs.
+  const float next_bucket_end = std::bit_cast<float>(std::bit_cast<std::uint32_t>(flat) + (1u << FloatBitsLut::kShift));
+  EXPECT_NE(ratio(std::nextafter(next_bucket_end, 0.0f)), ratio.table().front());
+
+  // A curve that changes from the first bucket on has no flat part (a ratio such as
+  // 1 / (1 + m) does: in float it is 1 - 2^-20 over the first few buckets); a constant one
+  // is flat throughout.
+  EXPECT_EQ(FloatBitsLut([](double m) { return std::log2(m); }, -20, 20).flat_below(), 0.0f);
+  const FloatBitsLut constant([](double) { return 5.0; }, -20, 20);
+  EXPECT_EQ(constant.flat_below(), constant.hi());
 }
 
 }  // namespace
