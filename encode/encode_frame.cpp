@@ -41,21 +41,28 @@ struct Mat3f {
 // The UI overlay converted for blending: premultiplied linear container nits + alpha, or
 // (for sRGB-space blending) straight sRGB-encoded values + alpha. The conversion is kept
 // for the next frame (a real-time loop composites the same overlay every frame).
+struct ConvertedUi {
+  std::vector<float> px;
+  float max_light = 0;  // the largest premultiplied channel (linear blending), nits
+};
+
 struct PreparedUi {
-  std::shared_ptr<const std::vector<float>> pixels;
-  const float* px = nullptr;  // pixels->data()
+  std::shared_ptr<const ConvertedUi> pixels;
+  const float* px = nullptr;  // pixels->px.data()
+  float max_light = 0;        // pixels->max_light
   int w = 0, h = 0, x0 = 0, y0 = 0;
   float scale = 1, dim = 0, white = 203;
   bool srgb_blend = false;
   bool active() const { return w > 0; }
 };
 
-std::vector<float> convert_overlay(const OverlayImage& o, const color::Primaries& container, double ui_white,
-                                   bool srgb_blend) {
+ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& container, double ui_white,
+                           bool srgb_blend) {
   const Mat3f to_c(color::rgb_to_rgb(color::kRec709, container));
   // sRGB EOTF from a table (UI values are mostly 8-bit levels; 1e-8 off the function).
   static const FloatBitsLut srgb([](double v) { return transfer::srgb_eotf(v); }, -24, 1);
   std::vector<float> px(o.rgba.size());
+  float max_light = 0;
   const std::size_t n = static_cast<std::size_t>(o.width) * o.height;
   for (std::size_t i = 0; i < n; ++i) {
     const float* q = &o.rgba[i * 4];
@@ -70,23 +77,26 @@ std::vector<float> convert_overlay(const OverlayImage& o, const color::Primaries
       float lin[3];
       for (int c = 0; c < 3; ++c) lin[c] = enc[c] > 0 ? srgb(enc[c]) : 0.0f;
       const float k = static_cast<float>(ui_white) * a;
-      for (int c = 0; c < 3; ++c)
+      for (int c = 0; c < 3; ++c) {
         out[c] = (to_c.m[c * 3] * lin[0] + to_c.m[c * 3 + 1] * lin[1] + to_c.m[c * 3 + 2] * lin[2]) * k;
+        // NaN (from a NaN alpha) counts as unbounded: the kernel then keeps its clamps.
+        max_light = std::isnan(out[c]) ? std::numeric_limits<float>::infinity() : std::max(max_light, out[c]);
+      }
     }
     out[3] = a;
   }
-  return px;
+  return {std::move(px), max_light};
 }
 
-std::shared_ptr<const std::vector<float>> converted_overlay(const std::shared_ptr<const OverlayImage>& o,
-                                                            const color::Primaries& container, double ui_white,
-                                                            bool srgb_blend) {
+std::shared_ptr<const ConvertedUi> converted_overlay(const std::shared_ptr<const OverlayImage>& o,
+                                                     const color::Primaries& container, double ui_white,
+                                                     bool srgb_blend) {
   struct Entry {
     std::weak_ptr<const OverlayImage> overlay;
     color::Primaries container;
     double ui_white;
     bool srgb_blend;
-    std::shared_ptr<const std::vector<float>> pixels;
+    std::shared_ptr<const ConvertedUi> pixels;
   };
   static std::mutex mu;
   static std::optional<Entry> last;
@@ -96,7 +106,7 @@ std::shared_ptr<const std::vector<float>> converted_overlay(const std::shared_pt
         last->srgb_blend == srgb_blend)
       return last->pixels;
   }
-  auto px = std::make_shared<const std::vector<float>>(convert_overlay(*o, container, ui_white, srgb_blend));
+  auto px = std::make_shared<const ConvertedUi>(convert_overlay(*o, container, ui_white, srgb_blend));
   std::lock_guard lock(mu);
   last = Entry{o, container, ui_white, srgb_blend, px};
   return px;
@@ -115,7 +125,8 @@ PreparedUi prepare_ui(const PreparedPipeline& p) {
   ui.white = static_cast<float>(p.settings.target.ui_white_nits);
   ui.srgb_blend = s.srgb_blend;
   ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend);
-  ui.px = ui.pixels->data();
+  ui.px = ui.pixels->px.data();
+  ui.max_light = ui.pixels->max_light;
   return ui;
 }
 
@@ -388,6 +399,7 @@ void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& ro
   fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
   fr.fallback = fallback.data();
   fr.ui = ui_row;
+  fr.ui_max = ui_row ? job.ui->max_light : 0.0f;
   kernels::fused_row(fr);
   cll.max_nits = std::max(cll.max_nits, fr.max_nits);
   cll.sum_nits += fr.sum_nits;

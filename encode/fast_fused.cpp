@@ -6,6 +6,7 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 
 #include "encode/fast_fused.hpp"
@@ -52,8 +53,10 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
 
 HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) { return lut(df, r.signal, v); }
 
-// FloatBitsQuantizer::code for a vector: the bucket's code, plus one from the bucket's
-// boundary on. Negative input lands in the first bucket; the constants are made once.
+// FloatBitsQuantizer::code for a vector: the bucket's code, plus one past the bucket's
+// last position with that code. Negative input (and the default NaN, whose sign bit is
+// set) lands in the first bucket; the constants are made once. `kBelowTop`: the caller
+// guarantees no input lies above the table (or is a positive NaN), so the upper clamp goes.
 struct Quantizer {
   explicit Quantizer(const QuantView& q)
       // Indexed by bits >> shift straight: the table's start moved back by the first
@@ -62,31 +65,35 @@ struct Quantizer {
                                                     (q.base_bits >> q.shift) * sizeof(std::uint32_t))),
         lo_bits(hn::Set(DI(), static_cast<std::int32_t>(q.base_bits))),
         hi_bits(hn::Set(DI(), static_cast<std::int32_t>(q.base_bits + q.top_rel))),
-        low_mask(hn::Set(DI(), static_cast<std::int32_t>((1u << q.shift) - 1))),
-        code_mask(hn::Set(DI(), (1 << FloatBitsQuantizer::kCodeBits) - 1)),
-        one(hn::Set(DI(), 1)),
-        shift(hn::Set(DU(), static_cast<std::uint32_t>(q.shift))) {}
+        code_mask(hn::Set(DU(), (1u << (32 - q.shift)) - 1)),
+        one(hn::Set(DU(), 1)),
+        shift(hn::Set(DU(), static_cast<std::uint32_t>(q.shift))),
+        low_shift(hn::Set(DU(), static_cast<std::uint32_t>(32 - q.shift))) {}
 
-  HWY_INLINE hn::Vec<DI> operator()(VF v) const {
+  template <bool kBelowTop>
+  HWY_INLINE hn::Vec<DI> code(VF v) const {
     const DI di;
     const DU du;
     // Positive floats order as their bits; negative ones are negative as int32 (-> the first bucket).
-    const auto bits = hn::Min(hn::Max(hn::BitCast(di, v), lo_bits), hi_bits);
-    const auto e = hn::GatherIndex(di, table, hn::BitCast(di, hn::BitCast(du, bits) >> shift));
-    const auto low = hn::And(bits, low_mask);  // the bucket starts on a multiple of 2^shift
+    auto clamped = hn::Max(hn::BitCast(di, v), lo_bits);
+    if (!kBelowTop) clamped = hn::Min(clamped, hi_bits);
+    const auto bits = hn::BitCast(du, clamped);
+    const auto e = hn::BitCast(du, hn::GatherIndex(di, table, hn::BitCast(di, bits >> shift)));
+    // The position inside the bucket, moved to the top: above the entry exactly when past
+    // the bucket's last position with the entry's code (float_lut.hpp).
+    const auto low_at_top = bits << low_shift;
     const auto code = hn::And(e, code_mask);
-    // The offset is the entry's top 17 bits: a logical shift (offsets below 2^16 + 1 compare as int).
-    const auto offset = hn::BitCast(di, hn::ShiftRight<FloatBitsQuantizer::kCodeBits>(hn::BitCast(du, e)));
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-    return hn::Vec<DI>{_mm512_mask_add_epi32(code.raw, _mm512_cmpge_epi32_mask(low.raw, offset.raw), code.raw, one.raw)};
+    return hn::BitCast(di, hn::Vec<DU>{_mm512_mask_add_epi32(code.raw, _mm512_cmpgt_epu32_mask(low_at_top.raw, e.raw),
+                                                              code.raw, one.raw)});
 #else
-    return hn::IfThenElse(hn::Lt(low, offset), code, hn::Add(code, one));
+    return hn::BitCast(di, hn::IfThenElse(hn::Gt(low_at_top, e), hn::Add(code, one), code));
 #endif
   }
 
   const std::int32_t* table;
-  hn::Vec<DI> lo_bits, hi_bits, low_mask, code_mask, one;
-  hn::Vec<DU> shift;
+  hn::Vec<DI> lo_bits, hi_bits;
+  hn::Vec<DU> code_mask, one, shift, low_shift;
 };
 
 // Decoded light of codes for MaxFALL: on AVX-512 the per-32-code quartic in code % 32
@@ -162,6 +169,7 @@ struct RuntimeSpec {
   bool quant() const { return r->codes.table != nullptr; }
   bool cll() const { return r->code_to_nits != nullptr; }
   bool signal16() const { return r->signal16 != nullptr; }
+  static constexpr bool below_top() { return false; }
 };
 
 struct Hdr10Spec {
@@ -173,10 +181,17 @@ struct Hdr10Spec {
   static constexpr bool quant() { return true; }
   static constexpr bool cll() { return true; }
   static constexpr bool signal16() { return false; }
+  // No code input lies above the quantiser's table, so its upper clamp goes: the ratio of
+  // max(RGB) keeps each channel at or below the peak (the curves never pass it:
+  // tonemap_test; 0.1 % covers the table's interpolation), and the UI adds at most ui_max.
+  static constexpr bool below_top() { return true; }
   static bool matches(const FusedRow& r) {
     const RuntimeSpec s{&r};
-    return s.half() == half() && s.tone() == tone() && s.container() == container() && s.gamut() == gamut() &&
-           s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16();
+    if (!(s.half() == half() && s.tone() == tone() && s.container() == container() && s.gamut() == gamut() &&
+          s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16()))
+      return false;
+    const float top = std::bit_cast<float>(r.codes.base_bits + r.codes.top_rel);
+    return r.peak * 1.001f + (r.ui ? r.ui_max : 0.0f) < top;
   }
 };
 
@@ -305,7 +320,7 @@ HWY_INLINE hn::Mask<DF> container_light(DF df, const Spec& spec, FusedRow& r, co
     ok = hn::And(hn::And(hn::And(hn::Ge(R, lo), hn::Ge(G, lo)), hn::And(hn::Ge(B, lo), hn::Le(R, hi))),
                  hn::And(hn::Le(G, hi), hn::Le(B, hi)));
   }
-  if (!hn::AllTrue(df, ok)) {
+  if (spec.gamut() && !hn::AllTrue(df, ok)) {
     alignas(64) float okf[64];
     hn::Store(hn::IfThenElseZero(ok, hn::Set(df, 1.0f)), df, okf);
     for (int i = 0; i < N; ++i)
@@ -382,7 +397,8 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
         auto code_of = [&](VF e) { return hn::Min(hn::ConvertTo(di, hn::MulAdd(e, scale, bias)), max_code); };
         hn::Vec<DI> cr, cg, cb;
         if (spec.quant()) {
-          cr = quantize(R), cg = quantize(G), cb = quantize(B);
+          constexpr bool kBelowTop = Spec::below_top();
+          cr = quantize.code<kBelowTop>(R), cg = quantize.code<kBelowTop>(G), cb = quantize.code<kBelowTop>(B);
         } else {
           cr = code_of(e_of(R)), cg = code_of(e_of(G)), cb = code_of(e_of(B));
         }

@@ -45,6 +45,7 @@ struct FusedRow {
   // UI blended in linear container light after the gamut check (not for scRGB): n x
   // (premultiplied nits r, g, b, fraction of the frame kept), or null.
   const float* ui = nullptr;
+  float ui_max = 0;  // the largest r, g or b in ui
   FusedOut out_kind = FusedOut::packed10;
   LutView signal;                      // nits -> E' (PNG samples; codes when `codes` is null)
   QuantView codes;                     // nits -> code, exact

@@ -31,7 +31,7 @@ FloatBitsQuantizer::FloatBitsQuantizer(const std::function<int(double)>& code, i
   auto code_at = [&](std::uint32_t bits) { return code(static_cast<double>(std::bit_cast<float>(bits))); };
   const int first = code_at(lo_bits), last = code_at(hi_bits);
   if (code(0.0) != first || code(static_cast<double>(std::numeric_limits<float>::max())) != last || last < first ||
-      last >= (1 << kCodeBits))
+      last > kMaxCode)
     return;
   // Where each code starts: the smallest float (as bits; positive floats order as their
   // bits) whose code reaches it.
@@ -63,9 +63,11 @@ FloatBitsQuantizer::FloatBitsQuantizer(const std::function<int(double)>& code, i
       const std::uint32_t begin = lo_bits + static_cast<std::uint32_t>(i << shift);
       while (next < starts.size() && starts[next] <= begin) ++next;
       const std::uint32_t c0 = static_cast<std::uint32_t>(first) + static_cast<std::uint32_t>(next);
-      std::uint32_t offset = 1u << shift;  // no boundary inside: never reached
-      if (next < starts.size() && starts[next] - begin < (1u << shift)) offset = starts[next] - begin;
-      table_[i] = c0 | (offset << kCodeBits);
+      // The last position with code c0: just before the next code's start (>= 1 past the
+      // bucket start), or the bucket's end.
+      std::uint32_t last_low = (1u << shift) - 1;
+      if (next < starts.size() && starts[next] - begin < (1u << shift)) last_low = starts[next] - begin - 1;
+      table_[i] = c0 | (last_low << (32 - shift));
     }
     return;
   }

@@ -60,17 +60,24 @@ class FloatBitsLut {
 // A monotonic float -> integer code function, tabulated exactly: every bucket of the
 // float's bit pattern (2^bits_per_octave per octave) holds the code at its start and, when
 // the next code starts inside it, where (in bits from the bucket start). One 32-bit load,
-// a compare and an add give the code the function gives for that very float: no
+// a shift, a compare and an add give the code the function gives for that very float: no
 // interpolation, no rounding, so a signal quantised this way has no off-by-one codes
 // against the double-precision reference. Used by the fast encode path for
 // nits -> PQ / sRGB / BT.1886 / gamma 2.2 codes, where one code spans at least 1/78 of an
 // octave (10-bit) and 128 to 512 buckets per octave hold at most one code boundary each.
+//
+// Entry layout, for a grid of 2^shift float bit patterns per bucket: the code at the
+// bucket start in the low 32 - shift bits, and above them `last`, the last position (bits
+// from the bucket start) that still has that code (2^shift - 1 when the next code does
+// not start inside the bucket). A float whose position in its bucket is `low` has the next
+// code exactly when low > last, that is when low << (32 - shift) > entry as unsigned
+// integers: the code below cannot tip the comparison.
 class FloatBitsQuantizer {
  public:
-  static constexpr int kCodeBits = 15;  // entry = code at bucket start | offset << kCodeBits
+  static constexpr int kMaxCode = 0xFFFF;  // the code field is at least 16 bits (shift <= 16)
 
   FloatBitsQuantizer() = default;
-  // code(x) must be non-decreasing on [0, inf) and below 2^kCodeBits. Tabulates it on
+  // code(x) must be non-decreasing on [0, inf) and at most kMaxCode. Tabulates it on
   // [2^min_exp2, 2^max_exp2) with the coarsest grid (128 to 2048 buckets per octave) that
   // keeps one boundary per bucket; empty() when none does, or when code is not constant
   // on [0, 2^min_exp2] and on [2^max_exp2, inf) (the kernel clamps into the range).
@@ -80,13 +87,14 @@ class FloatBitsQuantizer {
   int code(float v) const {
     const std::uint32_t rel = clamp_rel(v);
     const std::uint32_t e = table_[rel >> shift_];
-    return static_cast<int>(e & ((1u << kCodeBits) - 1)) + ((rel & mask()) >= (e >> kCodeBits) ? 1 : 0);
+    return static_cast<int>(e & code_mask()) + ((rel << (32 - shift_)) > e ? 1 : 0);
   }
 
   const std::vector<std::uint32_t>& table() const { return table_; }
   std::uint32_t base_bits() const { return base_bits_; }
   std::uint32_t top_rel() const { return top_rel_; }  // the largest bits - base_bits looked up
   int shift() const { return shift_; }
+  std::uint32_t code_mask() const { return (1u << (32 - shift_)) - 1; }
   std::uint32_t mask() const { return (1u << shift_) - 1; }
 
  private:

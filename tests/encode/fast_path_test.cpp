@@ -99,6 +99,52 @@ TEST_P(FusedKernel, EveryCompiledTargetMatchesTheStagedPath) {
   hwy::SetSupportedTargetsForTest(0);
 }
 
+// The HDR10 kernel drops the quantiser's upper clamp only when no code input can pass the
+// table's top (16384 cd/m2): the peak plus the brightest UI light. A 10 000 cd/m2 display
+// with a 10 000 cd/m2 UI over it can reach ~20 000 where the UI is translucent, so that
+// frame keeps the clamped kernel: its codes still match the staged path, top code included.
+TEST(FusedKernel, BrightUiOverABrightDisplayKeepsItsCodes) {
+  Image img(96, 4);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    const float v = std::exp2(-4.0f + 0.2f * static_cast<float>(i % 96));  // up to ~2^15 x paper white
+    img.rgba[i * 4] = v, img.rgba[i * 4 + 1] = v * 0.5f, img.rgba[i * 4 + 2] = v * 0.25f, img.rgba[i * 4 + 3] = 1;
+  }
+  ImageHalf half(img.width, img.height);
+  for (std::size_t i = 0; i < img.rgba.size(); ++i) half.rgba[i] = detail::float_to_half(img.rgba[i]);
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 96;
+  overlay->height = 2;
+  for (int i = 0; i < 192; ++i) overlay->rgba.insert(overlay->rgba.end(), {1.0f, 1.0f, 1.0f, (i % 4) / 3.0f});
+  for (const double peak : {1000.0, 10000.0}) {
+    EncodeSettings s;
+    s.target = default_target(Mode::hdr10);
+    s.target.peak_nits = peak;
+    s.target.ui_white_nits = 10000;
+    s.threads = 1;
+    s.ui.overlay = overlay;
+    s.ui.y = 1;
+    SceneInput in;
+    in.half = &half;
+    auto staged = s;
+    staged.keep_display_nits = true;
+    const auto want = encode_frame(in, staged);
+    const auto got = encode_frame(in, s);
+    ASSERT_TRUE(want.ok() && got.ok());
+    int top = 0;
+    for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+      const auto a = codes_at(*got, i), b = codes_at(*want, i);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_LE(std::abs(a[c] - b[c]), 1) << "peak " << peak << " pixel " << i;
+      }
+      top += a[0] == 1023;
+    }
+    if (peak == 10000) {
+      EXPECT_GT(top, 0);  // the UI over the brightest pixels reaches the top code
+    }
+    EXPECT_NEAR(got->content_light.max_cll_nits, want->content_light.max_cll_nits, 1e-3) << peak;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Inputs, FusedKernel,
                          ::testing::Values(Case{Range::full, false}, Case{Range::full, true}, Case{Range::narrow, false},
                                            Case{Range::narrow, true}),
