@@ -336,6 +336,7 @@ TEST(Encode, MeasuredContentLightMatchesTheEncoder) {
 namespace {
 // UI rows: the fused kernel composites the UI itself (unscaled overlays are copied,
 // scaled ones sampled bilinearly); the staged path (kept display nits) is the reference.
+// The overlay sits inside the frame, over its left edge and over its right edge.
 TEST(Encode, UiRowsMatchTheStagedPath) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> u(0, 4);
@@ -349,11 +350,12 @@ TEST(Encode, UiRowsMatchTheStagedPath) {
     overlay->rgba.insert(overlay->rgba.end(), {0.9f, 0.5f, 0.2f, a});
   }
   for (Mode m : {Mode::hdr10, Mode::sdr})
-  for (double scale : {1.5, 1.0}) {
-    SCOPED_TRACE(::testing::Message() << "mode " << to_string(m) << ", scale " << scale);
+  for (double scale : {1.5, 1.0})
+  for (int ui_x : {61, -5, 150}) {
+    SCOPED_TRACE(::testing::Message() << "mode " << to_string(m) << ", scale " << scale << ", x " << ui_x);
     auto fast = settings(m, "pq-shoulder");
     fast.ui.overlay = overlay;
-    fast.ui.x = 61;
+    fast.ui.x = ui_x;
     fast.ui.y = 13;
     fast.ui.scale = scale;
     fast.ui.dim = 0.3;
@@ -372,12 +374,14 @@ TEST(Encode, UiRowsMatchTheStagedPath) {
     EXPECT_LT(off, img.width * img.height * 3 / 200) << "more than 0.5 % of the values off by one";
     EXPECT_NEAR(a.content_light.max_cll_nits, b.content_light.max_cll_nits, b.content_light.max_cll_nits * 0.01);
     EXPECT_NEAR(a.content_light.max_fall_nits, b.content_light.max_fall_nits, b.content_light.max_fall_nits * 0.002);
-    // The overlay is there: a pixel under opaque UI differs from the same frame without UI.
+    // The overlay is there: a pixel under opaque UI differs from the same frame without UI,
+    // and one far from it is the same.
     auto plain = fast;
     plain.ui.overlay.reset();
     const auto p = encode(img, plain);
-    EXPECT_NE(codes_at(a, 70, 20), codes_at(p, 70, 20));
-    EXPECT_EQ(codes_at(a, 5, 20), codes_at(p, 5, 20));
+    const int under = ui_x + 9, away = ui_x > 80 ? 5 : 120;
+    EXPECT_NE(codes_at(a, under, 20), codes_at(p, under, 20));
+    EXPECT_EQ(codes_at(a, away, 20), codes_at(p, away, 20));
   }
 }
 }  // namespace
