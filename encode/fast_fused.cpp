@@ -1,8 +1,4 @@
-// Highway dynamic dispatch: this file is compiled once per SIMD target, AVX3_DL (Ice Lake
-// and later: byte permutes split the half input cheaper) included.
-#ifndef HWY_WANT_AVX3_DL
-#define HWY_WANT_AVX3_DL
-#endif
+// Highway dynamic dispatch: this file is compiled once per SIMD target.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "encode/fast_fused.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -206,19 +202,6 @@ HWY_INLINE void load_rgb(DF df, const Spec& spec, const FusedRow& r, int x, VF& 
     // 16 RGBA half pixels are two vectors; one word permute per channel gathers its 16 values.
     const __m512i lo = _mm512_loadu_si512(r.half_in + static_cast<std::size_t>(x) * 4);
     const __m512i hi = _mm512_loadu_si512(r.half_in + static_cast<std::size_t>(x) * 4 + 32);
-#if HWY_TARGET == HWY_AVX3_DL
-    // With VBMI the same split as byte permutes: one shuffle-port uop each where the word
-    // permute takes three (two of them on that port, which bounds this pass).
-    auto channel_bytes = [](int c) {
-      alignas(64) std::uint8_t idx[64] = {};
-      for (int i = 0; i < 32; ++i) idx[i] = static_cast<std::uint8_t>(2 * (4 * (i / 2) + c) + (i & 1));
-      return _mm512_load_si512(idx);
-    };
-    static const __m512i ir = channel_bytes(0), ig = channel_bytes(1), ib = channel_bytes(2);
-    R = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi8(lo, ir, hi)))};
-    G = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi8(lo, ig, hi)))};
-    B = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi8(lo, ib, hi)))};
-#else
     const __m512i ir = _mm512_set_epi16(0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 60, 56, 52, 48, 44, 40,
                                         36, 32, 28, 24, 20, 16, 12, 8, 4, 0);
     const __m512i one = _mm512_set1_epi16(1);
@@ -226,7 +209,6 @@ HWY_INLINE void load_rgb(DF df, const Spec& spec, const FusedRow& r, int x, VF& 
     R = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ir, hi)))};
     G = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ig, hi)))};
     B = VF{_mm512_cvtph_ps(_mm512_castsi512_si256(_mm512_permutex2var_epi16(lo, ib, hi)))};
-#endif
 #else
     const hn::Rebind<std::uint16_t, DF> du16;
     hn::Vec<decltype(du16)> r16, g16, b16, a16;

@@ -1,8 +1,6 @@
 // The fast encode path against the staged (reference-table) path: the fused kernel on every
 // SIMD target this CPU runs.
 #include <gtest/gtest.h>
-// The kernel is built for AVX3_DL too (fast_fused.cpp): list it among the targets to test.
-#define HWY_WANT_AVX3_DL
 #include <hwy/targets.h>
 
 #include <bit>
