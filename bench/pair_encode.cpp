@@ -15,7 +15,6 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/encode_inputs.hpp"
 #include "encode/pipeline.hpp"
 
 using namespace hdrd;
@@ -31,37 +31,6 @@ namespace {
 
 using PrepareFn = Result<PreparedPipeline> (*)(const SceneInput&, const EncodeSettings&);
 using EncodeFn = Result<void> (*)(const SceneInput&, const PreparedPipeline&, EncodedFrame&);
-
-// IEEE half from float, round to nearest even (finite, normal-range values only: the frame's).
-std::uint16_t to_half(float f) {
-  const std::uint32_t b = std::bit_cast<std::uint32_t>(f);
-  const std::uint32_t sign = (b >> 16) & 0x8000u;
-  const int exp = static_cast<int>((b >> 23) & 0xFF) - 127 + 15;
-  if (exp <= 0) return static_cast<std::uint16_t>(sign);
-  if (exp >= 31) return static_cast<std::uint16_t>(sign | 0x7BFFu);
-  std::uint32_t h = (static_cast<std::uint32_t>(exp) << 10) | ((b >> 13) & 0x3FFu);
-  const std::uint32_t rest = b & 0x1FFFu;
-  if (rest > 0x1000u || (rest == 0x1000u && (h & 1u))) ++h;
-  return static_cast<std::uint16_t>(sign | h);
-}
-
-// bench_encode's frame: smooth gradients over ~14 stops plus noise (a cheaper generator).
-ImageHalf make_frame(int w, int h) {
-  ImageHalf img(w, h);
-  std::uint32_t s = 42;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const std::size_t i = (static_cast<std::size_t>(y) * w + x) * 4;
-      const float base = -9.0f + 14.0f * static_cast<float>(x) / static_cast<float>(w) + 2.0f * std::sin(y * 0.01f);
-      for (int k = 0; k < 3; ++k) {
-        s = s * 1664525u + 1013904223u;
-        const float n = (static_cast<float>(s >> 8) / 16777216.0f - 0.5f) * 0.5f;
-        img.rgba[i + k] = to_half(std::exp2(base - 0.5f * static_cast<float>(k) + n));
-      }
-      img.rgba[i + 3] = 0x3C00;
-    }
-  return img;
-}
 
 struct Library {
   std::string path;
@@ -104,26 +73,10 @@ int main(int argc, char** argv) {
     libs.push_back(std::move(l));
   }
 
-  const ImageHalf img = make_frame(3840, 2160);
   SceneInput in;
-  in.half = &img;
-  EncodeSettings s;
-  s.target = default_target(Mode::hdr10);
-  s.threads = threads;
-  s.exposure.compensation_ev = 0.5;
-  s.png_samples = false;
-  if (ui) {
-    auto o = std::make_shared<OverlayImage>();
-    o->width = 1200;
-    o->height = 300;
-    o->rgba.resize(static_cast<std::size_t>(o->width) * o->height * 4);
-    for (std::size_t i = 0; i < o->rgba.size(); i += 4) {
-      o->rgba[i] = 0.9f, o->rgba[i + 1] = 0.9f, o->rgba[i + 2] = 1.0f;
-      o->rgba[i + 3] = (i / 4) % 7 == 0 ? 1.0f : 0.6f;
-    }
-    s.ui.overlay = o;
-    s.ui.x = 100, s.ui.y = 1700;
-  }
+  in.half = &bench::frame_half();
+  EncodeSettings s = bench::settings_for(Mode::hdr10, threads);
+  if (ui) bench::add_ui_overlay(s);
 
   const int n = static_cast<int>(libs.size());
   for (int r = -2; r < rounds; ++r) {
