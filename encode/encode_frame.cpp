@@ -417,9 +417,8 @@ void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& ro
 
 // The columns the UI can touch, [begin, end), widened to multiples of kUiColumnAlign so
 // that the three kernel calls of a UI row leave no tails for the exact (scalar) path but the
-// row's own: with a 1200-pixel UI at x = 100 the unaligned split sent 16 pixels of every UI
-// row there, which made the UI frame ~20 % slower than the plain one. Columns the overlay
-// does not cover composite nothing (alpha 0).
+// row's own (with a 1200-pixel UI at x = 100 the unaligned split sent 16 pixels of every UI
+// row there). Columns the overlay does not cover composite nothing (alpha 0).
 constexpr int kUiColumnAlign = 16;  // a multiple of every target's lane count
 std::pair<int, int> ui_columns(const PreparedUi& ui, int width) {
   int begin = std::clamp(static_cast<int>(std::floor(ui.x0 - ui.scale)), 0, width);
