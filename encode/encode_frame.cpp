@@ -49,7 +49,6 @@ struct ConvertedUi {
 struct PreparedUi {
   std::shared_ptr<const ConvertedUi> pixels;
   const float* px = nullptr;  // pixels->px.data()
-  float max_light = 0;        // pixels->max_light
   int w = 0, h = 0, x0 = 0, y0 = 0;
   float scale = 1, dim = 0, white = 203;
   bool srgb_blend = false;
@@ -126,7 +125,6 @@ PreparedUi prepare_ui(const PreparedPipeline& p) {
   ui.srgb_blend = s.srgb_blend;
   ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend);
   ui.px = ui.pixels->px.data();
-  ui.max_light = ui.pixels->max_light;
   return ui;
 }
 
@@ -406,7 +404,7 @@ void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& ro
   fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
   fr.fallback = fallback.data();
   fr.ui = ui_row;
-  fr.ui_max = ui_row ? job.ui->max_light : 0.0f;
+  fr.ui_max = ui_row ? job.ui->pixels->max_light : 0.0f;
   kernels::fused_row(fr);
   cll.max_nits = std::max(cll.max_nits, fr.max_nits);
   cll.sum_nits += fr.sum_nits;

@@ -43,8 +43,8 @@ class FloatBitsLut {
   // fetches both ends of a bucket (SIMD code).
   const std::vector<float>& pairs() const { return pairs_; }
   std::uint32_t base_bits() const { return base_bits_; }
-  // Where the table is flat from its bottom: every v below flat_below() (negative, NaN
-  // and below lo() included) looks up exactly table().front(), with no interpolation
+  // Where the table is flat from its bottom: every v < flat_below() (negative values and
+  // those below lo() included) looks up exactly table().front(), with no interpolation
   // step. 0 when the first bucket already slopes. A curve that is linear below a knee
   // (a ratio table that is constant there) lets SIMD code skip the lookup below it.
   float flat_below() const { return flat_below_; }
@@ -95,7 +95,6 @@ class FloatBitsQuantizer {
   std::uint32_t top_rel() const { return top_rel_; }  // the largest bits - base_bits looked up
   int shift() const { return shift_; }
   std::uint32_t code_mask() const { return (1u << (32 - shift_)) - 1; }
-  std::uint32_t mask() const { return (1u << shift_) - 1; }
 
  private:
   std::uint32_t clamp_rel(float v) const {
