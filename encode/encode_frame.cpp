@@ -482,7 +482,7 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   }
   auto view = [](const FloatBitsLut& l) {
     return kernels::LutView{l.table().data(), l.pairs().data(), l.base_bits(), l.lo(), l.hi(),
-                            std::nextafter(l.hi(), 0.0f), l.flat_below(), l.table().front()};
+                            std::nextafter(l.hi(), 0.0f), l.flat_below()};
   };
   r.m_in = job.m_in.m;
   r.paper_white = job.tone->paper_white;

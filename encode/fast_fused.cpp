@@ -267,7 +267,7 @@ HWY_INLINE void tone(DF df, const Spec& spec, const FusedRow& r, const MatV& m_c
       if (hn::AllTrue(df, hn::Lt(k, hn::Set(df, r.tone_lut.flat_below)))) {
         // All below the curve's knee, where the ratio table is flat (a curve linear there,
         // such as pq-shoulder up to its knee): the lookup's exact result, with no gather.
-        ratio = hn::Set(df, r.tone_lut.flat_value);
+        ratio = hn::Set(df, r.tone_lut.table[0]);
       } else {
         ratio = lut(df, r.tone_lut, k);
         // Above the table: the curve's value at the top, spread over k (saturates at the

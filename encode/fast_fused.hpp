@@ -16,8 +16,7 @@ struct LutView {
   std::uint32_t base_bits = 0;
   float lo = 0, hi = 0;
   float hi_prev = 0;  // the largest float below hi
-  // FloatBitsLut::flat_below(): below it the lookup is table[0] (flat_value) exactly.
-  float flat_below = 0, flat_value = 0;
+  float flat_below = 0;  // FloatBitsLut::flat_below(): below it the lookup is table[0] exactly
 };
 
 // FloatBitsQuantizer (float_lut.hpp) for a vector.
