@@ -28,7 +28,7 @@
 #include <fmt/format.h>
 
 #include "daemon/client.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "shading/renderer.hpp"
 

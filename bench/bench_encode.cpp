@@ -18,8 +18,8 @@
 
 #include "bench/encode_inputs.hpp"
 #include "encode/pipeline.hpp"
-#include "encode/pipeline_internal.hpp"
-#include "encode/transfer.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
+#include "encode/colour/transfer.hpp"
 
 namespace OCIO = OCIO_NAMESPACE;
 using namespace hdrd;

@@ -14,8 +14,8 @@
 #include <random>
 #include <thread>
 
-#include "encode/grade.hpp"
-#include "encode/lut.hpp"
+#include "encode/grade/grade.hpp"
+#include "encode/grade/lut.hpp"
 
 namespace OCIO = OCIO_NAMESPACE;
 using namespace hdrd;

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "encode/pipeline.hpp"
-#include "encode/pipeline_internal.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
 
 namespace hdrd::bench {
 

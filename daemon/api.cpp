@@ -15,9 +15,9 @@
 #include "daemon/output.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 
 #if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
 #include "display/displays.hpp"

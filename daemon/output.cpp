@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "encode/io.hpp"
-#include "encode/transfer.hpp"
+#include "encode/io/io.hpp"
+#include "encode/colour/transfer.hpp"
 
 #if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
 #include "display/displays.hpp"

@@ -10,7 +10,7 @@
 #include "daemon/paths.hpp"
 #include "daemon/pattern_catalogue.hpp"
 #include "daemon/text.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 
 namespace hdrd::daemon {
 namespace {

@@ -21,8 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/display_target.hpp"
-#include "encode/exposure.hpp"
-#include "encode/grade.hpp"
+#include "encode/tone/exposure.hpp"
+#include "encode/grade/grade.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::daemon {

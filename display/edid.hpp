@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::display {

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "display/edid.hpp"
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/display_target.hpp"
 #include "encode/result.hpp"
 

@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 
 #include "display/edid.hpp"
-#include "encode/color.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/color.hpp"
+#include "encode/colour/transfer.hpp"
 
 namespace hdrd::display {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd {

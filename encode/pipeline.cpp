@@ -15,8 +15,8 @@
 
 #include <fmt/format.h>
 
-#include "encode/pipeline_internal.hpp"
-#include "encode/transfer.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
+#include "encode/colour/transfer.hpp"
 
 namespace hdrd {
 

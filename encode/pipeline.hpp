@@ -14,14 +14,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/display_target.hpp"
-#include "encode/exposure.hpp"
+#include "encode/tone/exposure.hpp"
 #include "encode/frame.hpp"
-#include "encode/grade.hpp"
+#include "encode/grade/grade.hpp"
 #include "encode/image.hpp"
 #include "encode/result.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 
 namespace hdrd {
 

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "encode/color.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/color.hpp"
+#include "encode/colour/transfer.hpp"
 #include "patterns/patterns.hpp"
 
 namespace hdrd::patterns {

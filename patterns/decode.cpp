@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 
 namespace hdrd::patterns {
 

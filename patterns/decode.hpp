@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/display_target.hpp"
 #include "encode/frame.hpp"
 

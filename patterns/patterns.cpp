@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "encode/pipeline.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 #include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "encode/color.hpp"
+#include "encode/colour/color.hpp"
 #include "encode/display_target.hpp"
 #include "encode/frame.hpp"
 #include "encode/image.hpp"

@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "encode/tonemap.hpp"
-#include "encode/transfer.hpp"
+#include "encode/tone/tonemap.hpp"
+#include "encode/colour/transfer.hpp"
 #include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 #include "shading/materials.hpp"

@@ -10,7 +10,7 @@
 
 #include "encode/frame.hpp"
 #include "encode/image.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::patterns {

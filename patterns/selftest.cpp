@@ -11,7 +11,7 @@
 
 #include "display/hdr_metadata.hpp"
 #include "encode/pipeline.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 #include "patterns/patterns.hpp"
 #include "patterns/selftest.hpp"
 #include "shading/renderer.hpp"

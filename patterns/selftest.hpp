@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/frame.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 
 namespace hdrd::patterns {
 

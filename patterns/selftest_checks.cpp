@@ -1,5 +1,5 @@
 // The display-mode suite's check functions. Expected values come from the standards
-// (transfer functions of encode/transfer.hpp evaluated in double precision, and the
+// (transfer functions of encode/colour/transfer.hpp evaluated in double precision, and the
 // published numbers where one exists); measured values are decoded from the frame's own
 // bytes with patterns/decode.hpp.
 #include <algorithm>
@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
-#include "encode/tonemap.hpp"
-#include "encode/transfer.hpp"
+#include "encode/tone/tonemap.hpp"
+#include "encode/colour/transfer.hpp"
 #include "patterns/decode.hpp"
 #include "patterns/selftest.hpp"
 

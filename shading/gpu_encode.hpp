@@ -1,4 +1,4 @@
-// The GPU encode pass: the program encode/gpu_program.hpp generates from the CPU
+// The GPU encode pass: the program encode/kernel/gpu_program.hpp generates from the CPU
 // pipeline (the single source of truth for constants, curves and tables), run over the
 // rendered frame by a GpuPass. The CPU encoder (encode_frame) is the oracle: the codes
 // agree within 1 (tests/shading/gpu_encode_test.cpp).
@@ -6,7 +6,7 @@
 
 #include <memory>
 
-#include "encode/gpu_program.hpp"
+#include "encode/kernel/gpu_program.hpp"
 #include "encode/pipeline.hpp"
 #include "shading/gpu_pass.hpp"
 #include "shading/renderer.hpp"

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 #include "shading/materials.hpp"
 #include "shading/renderer_impl.hpp"
 

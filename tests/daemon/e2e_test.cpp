@@ -20,9 +20,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 #include "tests/daemon/daemon_harness.hpp"
 
 namespace hdrd::testing {

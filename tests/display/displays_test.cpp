@@ -11,7 +11,7 @@
 #include "display/displays.hpp"
 #include "display/drm_device.hpp"
 #include "display/dump_reader.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "tests/display/fake_kms.hpp"
 #include "tests/testing/testing.hpp"
 

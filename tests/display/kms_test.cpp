@@ -7,7 +7,7 @@
 
 #include "display/kms_output.hpp"
 #include "display/scanout.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 #include "tests/display/fake_kms.hpp"
 
 namespace hdrd::display {

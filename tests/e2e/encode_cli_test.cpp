@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace fs = std::filesystem;

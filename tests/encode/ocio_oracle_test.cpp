@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "encode/color.hpp"
-#include "encode/transfer.hpp"
+#include "encode/colour/color.hpp"
+#include "encode/colour/transfer.hpp"
 
 namespace OCIO = OCIO_NAMESPACE;
 using namespace hdrd;

@@ -8,8 +8,8 @@
 #include <random>
 
 #include "encode/pipeline.hpp"
-#include "encode/pipeline_internal.hpp"
-#include "encode/transfer.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
+#include "encode/colour/transfer.hpp"
 
 using namespace hdrd;
 using color::Vec3;

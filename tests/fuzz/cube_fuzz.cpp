@@ -1,11 +1,11 @@
-// Fuzz target for the .cube parser (encode/lut.cpp). Beyond "no crash": whatever parses
+// Fuzz target for the .cube parser (encode/grade/lut.cpp). Beyond "no crash": whatever parses
 // must write back and re-parse to the same tables, and evaluate without reading outside the tables.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <string_view>
 
-#include "encode/lut.hpp"
+#include "encode/grade/lut.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace hdrd::lut;

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto r = hdrd::io::read_exr_memory({data, size});

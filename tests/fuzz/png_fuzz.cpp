@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::uint8_t> bytes(data, size);

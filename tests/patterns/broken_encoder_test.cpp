@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "display/hdr_metadata.hpp"
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "patterns/patterns.hpp"
 #include "patterns/selftest.hpp"

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "patterns/plot.hpp"
 #include "tests/testing/testing.hpp"
 

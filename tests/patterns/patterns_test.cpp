@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
-#include "encode/transfer.hpp"
+#include "encode/io/io.hpp"
+#include "encode/colour/transfer.hpp"
 #include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 #include "patterns/patterns.hpp"

@@ -6,8 +6,8 @@
 #include <regex>
 #include <vector>
 
-#include "encode/io.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/io/io.hpp"
+#include "encode/tone/tonemap.hpp"
 #include "patterns/plot.hpp"
 #include "tests/testing/testing.hpp"
 

@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/transfer.hpp"
+#include "encode/colour/transfer.hpp"
 #include "tests/shading/render_testing.hpp"
 #include "tests/testing/testing.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "tests/shading/render_testing.hpp"
 #include "tests/testing/testing.hpp"
 

@@ -2,9 +2,9 @@
 // preview, labelled, side by side (as RTR4 fig. 8.15 compares four tone mappers).
 #include <filesystem>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 #include "patterns/plot.hpp"
 #include "tools/hdrd/command.hpp"
 #include "tools/hdrd/pipeline_options.hpp"

@@ -1,7 +1,7 @@
 // hdrd encode INPUT.exr -o OUTBASE: scene-referred EXR to display signals.
 #include <chrono>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "tools/hdrd/command.hpp"
 #include "tools/hdrd/pipeline_options.hpp"

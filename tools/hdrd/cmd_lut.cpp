@@ -6,11 +6,11 @@
 #include <cmath>
 #include <map>
 
-#include "encode/grade.hpp"
-#include "encode/io.hpp"
-#include "encode/lut.hpp"
-#include "encode/ocio.hpp"
-#include "encode/tonemap.hpp"
+#include "encode/grade/grade.hpp"
+#include "encode/io/io.hpp"
+#include "encode/grade/lut.hpp"
+#include "encode/grade/ocio.hpp"
+#include "encode/tone/tonemap.hpp"
 #include "tools/hdrd/command.hpp"
 
 namespace hdrd::cli {

@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "patterns/patterns.hpp"
 #include "tools/hdrd/command.hpp"
 #include "tools/hdrd/pipeline_options.hpp"

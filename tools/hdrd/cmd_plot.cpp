@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <span>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "patterns/plot.hpp"
 #include "tools/hdrd/command.hpp"

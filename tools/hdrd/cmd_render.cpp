@@ -4,7 +4,7 @@
 #include <chrono>
 #include <filesystem>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "shading/gpu_encode.hpp"
 #include "shading/renderer.hpp"

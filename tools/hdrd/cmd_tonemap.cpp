@@ -1,7 +1,7 @@
 // hdrd tonemap --list / --show NAME: the tone-curve registry.
 #include <nlohmann/json.hpp>
 
-#include "encode/tonemap.hpp"
+#include "encode/tone/tonemap.hpp"
 #include "tools/hdrd/command.hpp"
 
 namespace hdrd::cli {

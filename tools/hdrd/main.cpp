@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <exception>
 
-#include "encode/ocio.hpp"
+#include "encode/grade/ocio.hpp"
 #include "encode/result.hpp"
 #include "tools/hdrd/command.hpp"
 

@@ -11,8 +11,8 @@
 
 #include "display/displays.hpp"
 #include "display/profile.hpp"
-#include "encode/grade.hpp"
-#include "encode/lut.hpp"
+#include "encode/grade/grade.hpp"
+#include "encode/grade/lut.hpp"
 #include "encode/result.hpp"
 #include "patterns/plot.hpp"
 #include "tools/hdrd/command.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "encode/io.hpp"
+#include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 
 namespace hdrd::cli {

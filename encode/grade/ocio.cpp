@@ -1,0 +1,432 @@
+// OpenColorIO 2.1.2 glue (platform notes §3): processors from Config::CreateRaw for
+// files and built-ins, configs for looks and display/views, and the built-in ACES output
+// transforms as tone curves. OCIO exceptions become one-line hdrd::Error messages.
+#include "encode/grade/ocio.hpp"
+
+#include <OpenColorIO/OpenColorIO.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <functional>
+#include <mutex>
+
+#include "encode/colour/color.hpp"
+#include "encode/tone/tonemap.hpp"
+
+namespace OCIO = OCIO_NAMESPACE;
+
+namespace hdrd::ocio {
+
+struct Processor::Impl {
+  OCIO::ConstCPUProcessorRcPtr cpu;
+};
+
+namespace {
+
+std::string one_line(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  std::replace(s.begin(), s.end(), '\r', ' ');
+  s.erase(std::unique(s.begin(), s.end(), [](char a, char b) { return a == ' ' && b == ' '; }), s.end());
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+// OCIO logs interpolation fallbacks and similar to stderr; hdrd reports through its own
+// warnings instead, so OCIO's log is dropped unless HDRD_OCIO_LOG is set.
+void quiet_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!std::getenv("HDRD_OCIO_LOG")) OCIO::SetLoggingLevel(OCIO::LOGGING_LEVEL_NONE);
+  });
+}
+
+Processor make_processor(const OCIO::ConstProcessorRcPtr& p) {
+  auto impl = std::make_shared<Processor::Impl>();
+  impl->cpu = p->getDefaultCPUProcessor();
+  return Processor(std::move(impl));
+}
+
+// 4x4 row-major matrix for OCIO::MatrixTransform from a 3x3, scaled.
+OCIO::MatrixTransformRcPtr matrix_transform(const color::Mat3& m, double scale = 1.0) {
+  std::array<double, 16> m44{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m44[r * 4 + c] = m.m[r][c] * scale;
+  m44[15] = 1.0;
+  auto t = OCIO::MatrixTransform::Create();
+  t->setMatrix(m44.data());
+  return t;
+}
+
+OCIO::BuiltinTransformRcPtr builtin(const char* style, bool inverse = false) {
+  auto t = OCIO::BuiltinTransform::Create();
+  t->setStyle(style);
+  if (inverse) t->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
+  return t;
+}
+
+constexpr const char* kAp0ToXyz = "UTILITY - ACES-AP0_to_CIE-XYZ-D65_BFD";
+
+}  // namespace
+
+std::string version() { return OCIO::GetVersion(); }
+
+lut::Rgb Processor::apply(lut::Rgb rgb) const {
+  impl_->cpu->applyRGB(rgb.data());
+  return rgb;
+}
+
+void Processor::apply_rgba(float* rgba, std::size_t pixels, int threads) const {
+  lut::parallel_for(pixels, threads, 1 << 14, [&](std::size_t begin, std::size_t end) {
+    OCIO::PackedImageDesc desc(rgba + 4 * begin, static_cast<long>(end - begin), 1, 4);
+    impl_->cpu->apply(desc);
+  });
+}
+
+Result<Processor> file_transform(const std::filesystem::path& path, lut::Interpolation interp) {
+  quiet_logging();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    return make_error("grade.file", fmt::format("{}: no such LUT file", path.string()), "lut");
+  try {
+    OCIO::ClearAllCaches();  // OCIO caches files by path; a rewritten file must be re-read
+    auto config = OCIO::Config::CreateRaw();
+    auto ft = OCIO::FileTransform::Create();
+    ft->setSrc(std::filesystem::absolute(path).string().c_str());
+    ft->setInterpolation(interp == lut::Interpolation::tetrahedral ? OCIO::INTERP_TETRAHEDRAL : OCIO::INTERP_LINEAR);
+    return make_processor(config->getProcessor(ft));
+  } catch (const std::exception& e) {
+    return make_error("grade.format", fmt::format("{}: OpenColorIO cannot read it: {}", path.string(), one_line(e.what())), "lut");
+  }
+}
+
+// ---- Configs ---------------------------------------------------------------------------
+namespace {
+
+constexpr const char* kWorkingName = "hdrd linear Rec.2020 (working)";
+
+std::string join_names(int count, const std::function<const char*(int)>& name) {
+  std::string out;
+  for (int i = 0; i < count; ++i) out += (out.empty() ? "" : ", ") + std::string(name(i));
+  return out.empty() ? "none" : out;
+}
+
+std::string colour_space_names(const OCIO::Config& c) {
+  return join_names(c.getNumColorSpaces(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL), [&](int i) {
+    return c.getColorSpaceNameByIndex(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL, i);
+  });
+}
+
+Result<OCIO::ConstConfigRcPtr> open_config(const std::string& explicit_path, std::string& used) {
+  used = explicit_path;
+  if (used.empty())
+    if (const char* env = std::getenv("OCIO")) used = env;
+  if (used.empty())
+    return make_error("grade.ocio", "no OpenColorIO config: pass --ocio-config FILE or set $OCIO", "ocio_config");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(used, ec))
+    return make_error("grade.ocio", fmt::format("OpenColorIO config {}: no such file", used), "ocio_config");
+  try {
+    return OCIO::Config::CreateFromFile(used.c_str());
+  } catch (const std::exception& e) {
+    return make_error("grade.ocio", fmt::format("OpenColorIO config {}: {}", used, one_line(e.what())), "ocio_config");
+  }
+}
+
+// hdrd's working space as a colour space of (a copy of) the config: linear Rec.2020 D65
+// -> CIE XYZ -> ACES2065-1 (OCIO's Bradford built-in) -> the aces_interchange space's own
+// transform to the config reference.
+Result<std::string> add_working_space(OCIO::ConfigRcPtr& cfg) {
+  auto aces = cfg->getColorSpace(OCIO::ROLE_INTERCHANGE_SCENE);
+  if (!aces) return make_error("grade.ocio", "no aces_interchange colour space", "ocio_config");
+  auto group = OCIO::GroupTransform::Create();
+  group->appendTransform(matrix_transform(color::rgb_to_xyz(color::kRec2020)));
+  group->appendTransform(builtin(kAp0ToXyz, true));
+  if (auto to_ref = aces->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE)) {
+    group->appendTransform(to_ref->createEditableCopy());
+  } else if (auto from_ref = aces->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE)) {
+    auto inv = from_ref->createEditableCopy();
+    inv->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
+    group->appendTransform(inv);
+  }
+  auto cs = OCIO::ColorSpace::Create(OCIO::REFERENCE_SPACE_SCENE);
+  cs->setName(kWorkingName);
+  cs->setEncoding("scene-linear");
+  cs->setTransform(group, OCIO::COLORSPACE_DIR_TO_REFERENCE);
+  cfg->addColorSpace(cs);
+  return std::string(kWorkingName);
+}
+
+struct ConfigContext {
+  OCIO::ConfigRcPtr cfg;
+  std::string path, working;
+  nlohmann::json desc;
+};
+
+Result<std::string> check_colour_space(const OCIO::Config& cfg, const std::string& name) {
+  if (cfg.getColorSpace(name.c_str())) return name;
+  return make_error("grade.ocio", fmt::format("OpenColorIO config has no colour space '{}' (available: {})", name,
+                                              colour_space_names(cfg)), "ocio_colorspace");
+}
+
+Result<ConfigContext> config_context(const grade::GradeSettings& s, std::vector<std::string>* warnings) {
+  ConfigContext ctx;
+  auto base = open_config(s.ocio_config, ctx.path);
+  if (!base) return base.error();
+  ctx.cfg = (*base)->createEditableCopy();
+  const bool names_working = !s.ocio_colorspace.empty() && s.lut_path.empty() &&
+                             (!s.ocio_look.empty() || !s.ocio_display.empty());
+  if (names_working) {
+    auto ok = check_colour_space(*ctx.cfg, s.ocio_colorspace);
+    if (!ok) return ok.error();
+    ctx.working = *ok;
+  } else if (ctx.cfg->hasRole(OCIO::ROLE_INTERCHANGE_SCENE)) {
+    auto w = add_working_space(ctx.cfg);
+    if (!w) return w.error();
+    ctx.working = *w;
+  } else if (auto lin = ctx.cfg->getColorSpace(OCIO::ROLE_SCENE_LINEAR)) {
+    ctx.working = lin->getName();
+    if (warnings)
+      warnings->push_back(fmt::format("OpenColorIO config has no aces_interchange role: assuming its scene_linear "
+                                      "colour space '{}' is linear Rec.2020 (name another with --ocio-colorspace)",
+                                      ctx.working));
+  } else {
+    return make_error("grade.ocio", "OpenColorIO config has neither an aces_interchange nor a scene_linear role; "
+                                    "name the colour space of hdrd's linear Rec.2020 with --ocio-colorspace",
+                      "ocio_colorspace");
+  }
+  ctx.desc = {{"source", "ocio-config"}, {"config", ctx.path}, {"working_colorspace", ctx.working}};
+  return ctx;
+}
+
+// Display-referred output decoded to Rec.2020 display nits: display colour space ->
+// cie_xyz_d65_interchange -> Rec.2020, where XYZ Y = 1 is 100 cd/m2 for "hdr-video"
+// encodings (OCIO's ST 2084 built-ins use nits/100) and the display peak otherwise (SDR).
+Result<void> append_decode(ConfigContext& ctx, OCIO::GroupTransformRcPtr& group, const std::string& display_cs,
+                           double target_peak_nits) {
+  auto cs = ctx.cfg->getColorSpace(display_cs.c_str());
+  if (!cs || cs->getReferenceSpaceType() != OCIO::REFERENCE_SPACE_DISPLAY)
+    return make_error("grade.ocio", fmt::format("'{}' is not a display colour space of the config; hdrd decodes "
+                                                "display/view output to nits only through OCIO 2 display colour spaces",
+                                                display_cs), "ocio_display");
+  auto xyz = ctx.cfg->getColorSpace(OCIO::ROLE_INTERCHANGE_DISPLAY);
+  if (!xyz)
+    return make_error("grade.ocio", "OpenColorIO config has no cie_xyz_d65_interchange role: cannot decode display "
+                                    "output to nits", "ocio_config");
+  const std::string encoding = cs->getEncoding();
+  const double unit_nits = encoding == "hdr-video" ? 100.0 : target_peak_nits;
+  auto back = OCIO::ColorSpaceTransform::Create();
+  back->setSrc(display_cs.c_str());
+  back->setDst(xyz->getName());
+  group->appendTransform(back);
+  group->appendTransform(matrix_transform(color::xyz_to_rgb(color::kRec2020), unit_nits));
+  ctx.desc["display_colorspace"] = display_cs;
+  ctx.desc["encoding"] = encoding;
+  ctx.desc["xyz_unit_nits"] = unit_nits;
+  return {};
+}
+
+Result<void> check_look(const OCIO::Config& cfg, const std::string& looks) {
+  if (looks.find_first_of(",:+-") != std::string::npos || cfg.getLook(looks.c_str())) return {};
+  return make_error("grade.ocio", fmt::format("OpenColorIO config has no look '{}' (available: {})", looks,
+                                              join_names(cfg.getNumLooks(), [&](int i) { return cfg.getLookNameByIndex(i); })),
+                    "ocio_look");
+}
+
+Result<std::string> check_display_view(const OCIO::Config& cfg, const grade::GradeSettings& s) {
+  const auto displays = join_names(cfg.getNumDisplays(), [&](int i) { return cfg.getDisplay(i); });
+  bool found = false;
+  for (int i = 0; i < cfg.getNumDisplays(); ++i) found |= s.ocio_display == cfg.getDisplay(i);
+  if (!found)
+    return make_error("grade.ocio", fmt::format("OpenColorIO config has no display '{}' (available: {})", s.ocio_display,
+                                                displays), "ocio_display");
+  const char* d = s.ocio_display.c_str();
+  const std::string view = s.ocio_view.empty() ? cfg.getDefaultView(d) : s.ocio_view;
+  const auto views = join_names(cfg.getNumViews(d), [&](int i) { return cfg.getView(d, i); });
+  bool has_view = false;
+  for (int i = 0; i < cfg.getNumViews(d); ++i) has_view |= view == cfg.getView(d, i);
+  if (!has_view)
+    return make_error("grade.ocio", fmt::format("OpenColorIO display '{}' has no view '{}' (available: {})", s.ocio_display,
+                                                view, views), "ocio_view");
+  return view;
+}
+
+Result<ConfigGrade> build_config_grade(ConfigContext& ctx, const grade::GradeSettings& s, double target_peak_nits) {
+  auto group = OCIO::GroupTransform::Create();
+  ConfigGrade g;
+  if (!s.lut_path.empty()) {  // a LUT in a named colour space
+    auto cs = check_colour_space(*ctx.cfg, s.ocio_colorspace);
+    if (!cs) return cs.error();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(s.lut_path, ec))
+      return make_error("grade.file", fmt::format("{}: no such LUT file", s.lut_path), "lut");
+    auto to = OCIO::ColorSpaceTransform::Create();
+    to->setSrc(ctx.working.c_str());
+    to->setDst(cs->c_str());
+    auto ft = OCIO::FileTransform::Create();
+    ft->setSrc(std::filesystem::absolute(s.lut_path).string().c_str());
+    ft->setInterpolation(s.trilinear ? OCIO::INTERP_LINEAR : OCIO::INTERP_TETRAHEDRAL);
+    auto from = OCIO::ColorSpaceTransform::Create();
+    from->setSrc(cs->c_str());
+    from->setDst(ctx.working.c_str());
+    group->appendTransform(to);
+    group->appendTransform(ft);
+    group->appendTransform(from);
+    ctx.desc["lut"] = s.lut_path;
+    ctx.desc["lut_colorspace"] = *cs;
+  } else if (!s.ocio_display.empty()) {
+    auto view = check_display_view(*ctx.cfg, s);
+    if (!view) return view.error();
+    auto dv = OCIO::DisplayViewTransform::Create();
+    dv->setSrc(ctx.working.c_str());
+    dv->setDisplay(s.ocio_display.c_str());
+    dv->setView(view->c_str());
+    group->appendTransform(dv);
+    std::string dcs = ctx.cfg->getDisplayViewColorSpaceName(s.ocio_display.c_str(), view->c_str());
+    if (dcs == "<USE_DISPLAY_NAME>") dcs = s.ocio_display;
+    auto ok = append_decode(ctx, group, dcs, target_peak_nits);
+    if (!ok) return ok.error();
+    g.placement = grade::Placement::baked;
+    ctx.desc["display"] = s.ocio_display;
+    ctx.desc["view"] = *view;
+  } else if (!s.ocio_look.empty()) {
+    auto ok = check_look(*ctx.cfg, s.ocio_look);
+    if (!ok) return ok.error();
+    auto lt = OCIO::LookTransform::Create();
+    lt->setSrc(ctx.working.c_str());
+    lt->setDst(ctx.working.c_str());
+    lt->setLooks(s.ocio_look.c_str());
+    group->appendTransform(lt);
+    ctx.desc["look"] = s.ocio_look;
+  } else {  // a display colour space alone
+    auto cs = check_colour_space(*ctx.cfg, s.ocio_colorspace);
+    if (!cs) return cs.error();
+    if (ctx.cfg->getColorSpace(cs->c_str())->getReferenceSpaceType() != OCIO::REFERENCE_SPACE_DISPLAY)
+      return make_error("grade.ocio", fmt::format("--ocio-colorspace '{}' alone needs a display colour space; for a "
+                                                  "scene-referred one pass --lut (the LUT's input space) or --ocio-look",
+                                                  *cs), "ocio_colorspace");
+    auto to = OCIO::ColorSpaceTransform::Create();
+    to->setSrc(ctx.working.c_str());
+    to->setDst(cs->c_str());
+    group->appendTransform(to);
+    auto ok = append_decode(ctx, group, *cs, target_peak_nits);
+    if (!ok) return ok.error();
+    g.placement = grade::Placement::baked;
+  }
+  g.processor = make_processor(ctx.cfg->getProcessor(group));
+  ctx.desc["placement"] = std::string(grade::to_string(g.placement));
+  g.description = ctx.desc;
+  return g;
+}
+
+}  // namespace
+
+Result<ConfigGrade> load_config_grade(const grade::GradeSettings& s, double target_peak_nits,
+                                      std::vector<std::string>* warnings) {
+  quiet_logging();
+  try {
+    OCIO::ClearAllCaches();
+    auto ctx = config_context(s, warnings);
+    if (!ctx) return ctx.error();
+    return build_config_grade(*ctx, s, target_peak_nits);
+  } catch (const std::exception& e) {
+    return make_error("grade.ocio", fmt::format("OpenColorIO: {}", one_line(e.what())), "ocio_config");
+  }
+}
+
+// ---- ACES output transforms as tone curves -----------------------------------------------
+const std::vector<AcesOutput>& aces_outputs() {
+  static const std::vector<AcesOutput> v = {
+      {"aces-ocio-sdr-video", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - SDR-VIDEO_1.0", 100, 100},
+      {"aces-ocio-hdr-1000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-1000nit-15nit-REC2020lim_1.1", 1000, 100},
+      {"aces-ocio-hdr-2000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-2000nit-15nit-REC2020lim_1.1", 2000, 100},
+      {"aces-ocio-hdr-4000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-4000nit-15nit-REC2020lim_1.1", 4000, 100},
+  };
+  return v;
+}
+
+namespace {
+
+using color::Vec3;
+
+// relative Rec.2020 -> XYZ -> ACES2065-1 (Bradford) -> ACES output -> display XYZ (D65).
+OCIO::ConstCPUProcessorRcPtr aces_processor(std::size_t index) {
+  static std::mutex mu;
+  static std::vector<OCIO::ConstCPUProcessorRcPtr> cache(aces_outputs().size());
+  std::lock_guard lock(mu);
+  if (!cache[index]) {
+    quiet_logging();
+    auto group = OCIO::GroupTransform::Create();
+    group->appendTransform(matrix_transform(color::rgb_to_xyz(color::kRec2020)));
+    group->appendTransform(builtin(kAp0ToXyz, true));
+    group->appendTransform(builtin(aces_outputs()[index].builtin));
+    cache[index] = OCIO::Config::CreateRaw()->getProcessor(group)->getDefaultCPUProcessor();
+  }
+  return cache[index];
+}
+
+class AcesCurve final : public tonemap::Curve {
+ public:
+  AcesCurve(std::size_t index, const tonemap::Display& d)
+      : cpu_(aces_processor(index)),
+        to_rec2020_(color::xyz_to_rgb(color::kRec2020)),
+        scale_(aces_outputs()[index].unit_nits / d.paper_white_nits),
+        max_y_(d.max_y()) {}
+  double map(double x) const override { return map_rgb({x, x, x}, tonemap::Apply::rgb).y; }
+  // Fixed-peak transform: on a display dimmer than its peak the excess is clipped per
+  // channel (the registry's rule: no curve exceeds the display peak).
+  Vec3 map_rgb(Vec3 rgb, tonemap::Apply) const override {
+    float px[3] = {float(std::max(rgb.x, 0.0)), float(std::max(rgb.y, 0.0)), float(std::max(rgb.z, 0.0))};
+    cpu_->applyRGB(px);
+    const Vec3 out = to_rec2020_ * Vec3{px[0], px[1], px[2]} * scale_;
+    const auto clip = [&](double v) { return std::clamp(v, 0.0, max_y_); };
+    return {clip(out.x), clip(out.y), clip(out.z)};
+  }
+
+ private:
+  OCIO::ConstCPUProcessorRcPtr cpu_;
+  color::Mat3 to_rec2020_;
+  double scale_, max_y_;
+};
+
+template <std::size_t I>
+std::unique_ptr<tonemap::Curve> prepare_aces(const tonemap::Display& d, const tonemap::ParamValues&) {
+  return std::make_unique<AcesCurve>(I, d);
+}
+
+constexpr std::array<std::string_view, 4> kAcesDescriptions = {
+    "ACES 1.0 SDR video output transform (RRT + ODT, 100 nits) via OpenColorIO; fixed peak 100 cd/m2",
+    "ACES 1.1 HDR video output transform, 1000 nits, 15 nits mid grey, Rec.2020-limited, via OpenColorIO; "
+    "fixed peak 1000 cd/m2",
+    "ACES 1.1 HDR video output transform, 2000 nits, 15 nits mid grey, Rec.2020-limited, via OpenColorIO; "
+    "fixed peak 2000 cd/m2",
+    "ACES 1.1 HDR video output transform, 4000 nits, 15 nits mid grey, Rec.2020-limited, via OpenColorIO; "
+    "fixed peak 4000 cd/m2",
+};
+
+}  // namespace
+
+void register_tone_curves() {
+  using P = std::unique_ptr<tonemap::Curve> (*)(const tonemap::Display&, const tonemap::ParamValues&);
+  static constexpr std::array<P, 4> kPrepare = {&prepare_aces<0>, &prepare_aces<1>, &prepare_aces<2>, &prepare_aces<3>};
+  static_assert(kPrepare.size() == kAcesDescriptions.size());
+  for (std::size_t i = 0; i < kPrepare.size(); ++i) {
+    tonemap::ToneCurveInfo info{aces_outputs()[i].curve_name,
+                                kAcesDescriptions[i],
+                                "Academy ACES 1.0/1.1 RRT+ODT as built into OpenColorIO 2.1 (BuiltinTransform)",
+                                {},
+                                tonemap::Apply::rgb,
+                                false,
+                                false,
+                                false,
+                                kPrepare[i]};
+    tonemap::register_curve(std::move(info));
+  }
+}
+
+namespace {
+[[maybe_unused]] const bool kRegistered = (register_tone_curves(), true);
+}
+
+}  // namespace hdrd::ocio

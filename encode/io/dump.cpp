@@ -1,0 +1,386 @@
+// Raw DRM buffers, JSON sidecars, atomic writes and the all-or-nothing dump of an
+// encoded frame (docs/dump-format.md describes every file and key written here).
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <future>
+#include <random>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "encode/io/io.hpp"
+#include "encode/io/internal.hpp"
+#include "encode/colour/transfer.hpp"
+
+namespace hdrd::io {
+namespace fs = std::filesystem;
+
+// ---- frame checks -----------------------------------------------------------------------
+
+namespace detail {
+
+int bytes_per_pixel(std::uint32_t drm_fourcc) {
+  if (drm_fourcc == kDrmFormatXbgr2101010 || drm_fourcc == kDrmFormatXrgb8888) return 4;
+  if (drm_fourcc == kDrmFormatAbgr16161616f) return 8;
+  return 0;
+}
+
+namespace {
+bool fourcc_fits_mode(std::uint32_t fourcc, Mode mode) {
+  switch (mode) {
+    case Mode::hdr10:
+    case Mode::hlg: return fourcc == kDrmFormatXbgr2101010;
+    case Mode::scrgb: return fourcc == kDrmFormatAbgr16161616f;
+    case Mode::sdr:
+    case Mode::sdr_bt1886: return fourcc == kDrmFormatXrgb8888 || fourcc == kDrmFormatXbgr2101010;
+  }
+  return false;
+}
+}  // namespace
+
+Result<void> check_frame(const EncodedFrame& f) {
+  const auto bad = [](std::string msg) { return make_error("frame.invalid", std::move(msg)); };
+  if (auto size = check_image_size(f.width, f.height); !size) return size.error();
+  const int bpp = bytes_per_pixel(f.drm_fourcc);
+  if (bpp == 0) return bad(fmt::format("unsupported DRM format 0x{:08x}", f.drm_fourcc));
+  if (!fourcc_fits_mode(f.drm_fourcc, f.target.mode))
+    return bad(fmt::format("DRM format {} does not fit mode {}", fourcc_name(f.drm_fourcc), to_string(f.target.mode)));
+  if (f.stride_bytes < static_cast<std::size_t>(f.width) * bpp)
+    return bad(fmt::format("stride {} bytes is less than width {} x {} bytes per pixel", f.stride_bytes, f.width, bpp));
+  if (f.data.size() != f.stride_bytes * static_cast<std::size_t>(f.height))
+    return bad(fmt::format("buffer holds {} bytes, expected stride {} x height {} = {}", f.data.size(), f.stride_bytes,
+                           f.height, f.stride_bytes * static_cast<std::size_t>(f.height)));
+  if (!f.signal16.empty() && f.signal16.size() != static_cast<std::size_t>(f.width) * f.height * 3)
+    return bad(fmt::format("signal16 holds {} samples, expected width x height x 3 = {}", f.signal16.size(),
+                           static_cast<std::size_t>(f.width) * f.height * 3));
+  return {};
+}
+
+}  // namespace detail
+
+// ---- atomic writes ----------------------------------------------------------------------
+
+namespace {
+
+std::string errno_text(int err) { return std::strerror(err); }
+
+// A file written under a temporary name next to its final path; removed unless committed.
+class TempFile {
+ public:
+  TempFile() = default;
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  TempFile(TempFile&& o) noexcept : temp_(std::move(o.temp_)), final_(std::move(o.final_)) { o.temp_.clear(); }
+  ~TempFile() { discard(); }
+
+  static Result<TempFile> write(const fs::path& final_path, std::span<const std::uint8_t> bytes);
+  Result<void> commit();
+  void discard() {
+    if (!temp_.empty()) ::unlink(temp_.c_str());
+    temp_.clear();
+  }
+  const fs::path& final_path() const { return final_; }
+
+ private:
+  fs::path temp_, final_;
+};
+
+Error write_error(const fs::path& path, const std::string& what, int err) {
+  return make_error("io.write", fmt::format("cannot write {}: {} ({})", path.string(), what, errno_text(err)));
+}
+
+// Creates "<dir>/.<name>.tmp-<random>" with O_EXCL (mode 0666 less the umask, as a plain
+// open would give the final file).
+Result<int> create_temp(const fs::path& final_path, fs::path& temp) {
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    temp = dir / fmt::format(".{}.tmp-{:012x}", final_path.filename().string(), rng() & 0xffffffffffffull);
+    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0) return fd;
+    if (errno != EEXIST) return write_error(final_path, "cannot create a temporary file", errno);
+  }
+  return write_error(final_path, "cannot create a temporary file", EEXIST);
+}
+
+Result<TempFile> TempFile::write(const fs::path& final_path, std::span<const std::uint8_t> bytes) {
+  TempFile t;
+  auto fd = create_temp(final_path, t.temp_);
+  if (!fd) return fd.error();
+  t.final_ = final_path;
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(*fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : ENOSPC;
+      ::close(*fd);
+      return write_error(final_path, "write failed", err);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  // fsync before rename, so that after a crash the name holds either the old or the new file.
+  if (::fsync(*fd) != 0) {
+    const int err = errno;
+    ::close(*fd);
+    return write_error(final_path, "fsync failed", err);
+  }
+  if (::close(*fd) != 0) return write_error(final_path, "close failed", errno);
+  return t;
+}
+
+Result<void> TempFile::commit() {
+  if (::rename(temp_.c_str(), final_.c_str()) != 0) return write_error(final_, "cannot rename the temporary file", errno);
+  temp_.clear();
+  return {};
+}
+
+// Renames every temp file to its final name; if one fails, removes the files already
+// renamed (and the destructors remove the rest), so nothing is left half-done.
+Result<void> commit_all(std::vector<TempFile>& files) {
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (auto ok = files[i].commit(); !ok) {
+      for (std::size_t j = 0; j < i; ++j) ::unlink(files[j].final_path().c_str());
+      return ok.error();
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes) {
+  auto temp = TempFile::write(path, bytes);
+  if (!temp) return temp.error();
+  return temp->commit();
+}
+
+// ---- raw --------------------------------------------------------------------------------
+
+Result<void> write_raw(const fs::path& path, const EncodedFrame& frame) {
+  if (auto ok = detail::check_frame(frame); !ok) return ok.error();
+  return atomic_write(path, frame.data);
+}
+
+// ---- sidecar ----------------------------------------------------------------------------
+
+namespace {
+
+nlohmann::json xy(color::Chromaticity c) { return nlohmann::json::array({c.x, c.y}); }
+
+nlohmann::json primaries_json(const color::Primaries& p) {
+  return {{"red", xy(p.red)}, {"green", xy(p.green)}, {"blue", xy(p.blue)}, {"white", xy(p.white)}};
+}
+
+std::string_view container_name(const DisplayTarget& t) {
+  return t.container() == color::kRec2020 ? "rec2020" : "rec709";
+}
+
+std::string_view transfer_name(const DisplayTarget& t) {
+  switch (t.mode) {
+    case Mode::hdr10: return "pq";
+    case Mode::hlg: return "hlg";
+    case Mode::scrgb: return "linear";
+    case Mode::sdr: return t.sdr_curve == SdrCurve::srgb ? "srgb" : "gamma22";
+    case Mode::sdr_bt1886: return "bt1886";
+  }
+  return "?";
+}
+
+int bits_of(std::uint32_t fourcc) {
+  if (fourcc == kDrmFormatXrgb8888) return 8;
+  if (fourcc == kDrmFormatAbgr16161616f) return 16;
+  return 10;
+}
+
+// CTA-861.3 carries whole cd/m2: round up so the metadata never understates the content.
+std::int64_t ceil_nits(double nits) {
+  if (!(nits > 0)) return 0;
+  return static_cast<std::int64_t>(std::ceil(nits - 1e-9));
+}
+
+}  // namespace
+
+nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::string, std::string>& files) {
+  const DisplayTarget& t = frame.target;
+  const int bpp = detail::bytes_per_pixel(frame.drm_fourcc);
+  nlohmann::json j;
+  j["format"] = "hdrd-dump";
+  j["format_version"] = 1;
+#ifdef HDRD_VERSION_STRING
+  j["hdrd_version"] = HDRD_VERSION_STRING;
+#endif
+  j["mode"] = std::string(to_string(t.mode));
+  j["fourcc"] = fourcc_name(frame.drm_fourcc);
+  j["fourcc_code"] = frame.drm_fourcc;
+  j["width"] = frame.width;
+  j["height"] = frame.height;
+  j["stride_bytes"] = frame.stride_bytes;
+  j["bytes_per_pixel"] = bpp;
+  j["bits"] = bits_of(frame.drm_fourcc);
+  j["range"] = t.mode == Mode::scrgb ? "full" : std::string(to_string(t.range));
+  j["container"] = {{"name", container_name(t)}, {"primaries", primaries_json(t.container())}};
+  j["transfer"] = std::string(transfer_name(t));
+  if (t.mode == Mode::hlg) j["hlg_system_gamma"] = transfer::hlg_system_gamma(t.peak_nits);
+  j["peak_nits"] = t.peak_nits;
+  j["black_nits"] = t.black_nits;
+  j["paper_white_nits"] = t.paper_white_nits;
+  j["ui_white_nits"] = t.ui_white_nits;
+  j["sdr_white_nits"] = t.sdr_white_nits;
+  j["target_source"] = t.source;
+  j["mastering_display"] = {{"primaries", primaries_json(frame.mastering.primaries)},
+                            {"max_nits", frame.mastering.max_nits},
+                            {"min_nits", frame.mastering.min_nits}};
+  j["content_light_level"] = {{"max_cll_nits", ceil_nits(frame.content_light.max_cll_nits)},
+                              {"max_fall_nits", ceil_nits(frame.content_light.max_fall_nits)},
+                              {"max_cll_nits_measured", frame.content_light.max_cll_nits},
+                              {"max_fall_nits_measured", frame.content_light.max_fall_nits}};
+  j["files"] = files;
+  j["settings"] = frame.settings.is_object() ? frame.settings : nlohmann::json::object();
+  return j;
+}
+
+// ---- dump formats -----------------------------------------------------------------------
+
+std::optional<DumpFormat> parse_dump_format(std::string_view s) {
+  if (s == "png") return DumpFormat::png;
+  if (s == "exr") return DumpFormat::exr;
+  if (s == "raw") return DumpFormat::raw;
+  return std::nullopt;
+}
+
+std::vector<DumpFormat> default_formats(Mode mode) {
+  if (mode == Mode::scrgb) return {DumpFormat::exr, DumpFormat::raw};
+  return {DumpFormat::png, DumpFormat::exr, DumpFormat::raw};
+}
+
+namespace {
+
+std::string_view extension(DumpFormat f) {
+  switch (f) {
+    case DumpFormat::png: return "png";
+    case DumpFormat::exr: return "exr";
+    case DumpFormat::raw: return "raw";
+  }
+  return "?";
+}
+
+// settings values as EXR string attributes: strings as they are, anything else as JSON.
+std::map<std::string, std::string> exr_attributes(const EncodedFrame& frame) {
+  const DisplayTarget& t = frame.target;
+  std::map<std::string, std::string> a;
+  a["mode"] = std::string(to_string(t.mode));
+  a["peak_nits"] = fmt::format("{}", t.peak_nits);
+  a["black_nits"] = fmt::format("{}", t.black_nits);
+  a["paper_white_nits"] = fmt::format("{}", t.paper_white_nits);
+  if (frame.settings.is_object())
+    for (const auto& [key, value] : frame.settings.items())
+      a["settings." + key] = value.is_string() ? value.get<std::string>() : value.dump();
+  return a;
+}
+
+// EXR dump of an encoded frame: display light in the container primaries, scaled so that
+// value x whiteLuminance = cd/m2 (scRGB: nits / 80, whiteLuminance 80; otherwise
+// nits / paper white, whiteLuminance = paper white).
+Result<std::vector<std::uint8_t>> dump_exr_bytes(const EncodedFrame& frame) {
+  if (!frame.display_nits)
+    return make_error("dump.exr", "the EXR dump needs the frame's display light (display_nits), which the encoder did not keep",
+                      "format");
+  const Image& nits = *frame.display_nits;
+  if (nits.width != frame.width || nits.height != frame.height)
+    return make_error("dump.exr", fmt::format("display light is {}x{}, the frame is {}x{}", nits.width, nits.height,
+                                              frame.width, frame.height));
+  const double white = frame.target.mode == Mode::scrgb ? transfer::kScrgbUnitNits : frame.target.paper_white_nits;
+  if (!(white > 0)) return make_error("dump.exr", "paper white must be positive for the EXR dump", "paper_white_nits");
+  Image scaled = nits;
+  const float inv = static_cast<float>(1.0 / white);
+  for (std::size_t i = 0; i < scaled.rgba.size(); ++i)
+    if (i % 4 != 3) scaled.rgba[i] *= inv;
+  ExrWriteOptions options;
+  options.half = true;
+  options.chromaticities = frame.target.container();
+  options.white_luminance = white;
+  options.attributes = exr_attributes(frame);
+  options.compression = "piz";  // lossless, about twice as fast as zip for 4K half (platform notes §4)
+  return encode_exr(scaled, options);
+}
+
+fs::path with_extension(const fs::path& outbase, std::string_view ext) {
+  fs::path p = outbase;
+  p += ".";
+  p += std::string(ext);
+  return p;
+}
+
+Result<std::vector<std::uint8_t>> dump_bytes(const EncodedFrame& frame, DumpFormat f) {
+  switch (f) {
+    case DumpFormat::png: return encode_png(frame);
+    case DumpFormat::exr: return dump_exr_bytes(frame);
+    case DumpFormat::raw: return frame.data;
+  }
+  return make_error("dump.format", "unknown dump format");
+}
+
+}  // namespace
+
+Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbase,
+                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra) {
+  if (outbase.empty() || !outbase.has_filename())
+    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
+  if (auto ok = detail::check_frame(frame); !ok) return ok.error();
+  std::vector<DumpFormat> wanted;
+  for (DumpFormat f : formats.empty() ? default_formats(frame.target.mode) : formats)
+    if (std::find(wanted.begin(), wanted.end(), f) == wanted.end()) wanted.push_back(f);
+
+  // Encode everything in memory first, the formats concurrently (libpng is single-threaded),
+  // so that a format that cannot be produced fails before any file is touched.
+  std::vector<std::future<Result<std::vector<std::uint8_t>>>> jobs;
+  for (DumpFormat f : wanted)
+    jobs.push_back(std::async(std::launch::async, [&frame, f] { return dump_bytes(frame, f); }));
+  std::vector<std::pair<DumpFormat, std::vector<std::uint8_t>>> encoded;
+  std::optional<Error> failure;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    auto bytes = jobs[i].get();
+    if (!bytes && !failure) failure = bytes.error();
+    if (bytes) encoded.emplace_back(wanted[i], std::move(bytes.value()));
+  }
+  if (failure) return *failure;
+  DumpResult result;
+  std::map<std::string, std::string> names;  // relative to the sidecar's directory
+  for (const auto& [f, bytes] : encoded) {
+    const fs::path p = with_extension(outbase, extension(f));
+    result.files[std::string(extension(f))] = p.string();
+    names[std::string(extension(f))] = p.filename().string();
+  }
+  for (const auto& x : extra) {
+    const fs::path p = outbase.string() + x.suffix;
+    result.files[x.kind] = p.string();
+    names[x.kind] = p.filename().string();
+  }
+  const fs::path sidecar_path = with_extension(outbase, "json");
+  const std::string sidecar = sidecar_json(frame, names).dump(2) + "\n";
+
+  std::vector<TempFile> temps;
+  for (const auto& [f, bytes] : encoded) {
+    auto t = TempFile::write(with_extension(outbase, extension(f)), bytes);
+    if (!t) return t.error();
+    temps.push_back(std::move(t.value()));
+  }
+  for (const auto& x : extra) {
+    auto t = TempFile::write(outbase.string() + x.suffix, x.bytes);
+    if (!t) return t.error();
+    temps.push_back(std::move(t.value()));
+  }
+  auto t = TempFile::write(sidecar_path, std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size()));
+  if (!t) return t.error();
+  temps.push_back(std::move(t.value()));
+  if (auto ok = commit_all(temps); !ok) return ok.error();
+  result.files["sidecar"] = sidecar_path.string();
+  return result;
+}
+
+}  // namespace hdrd::io

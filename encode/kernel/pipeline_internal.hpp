@@ -1,0 +1,71 @@
+// Internal pieces of the encode pipeline shared by pipeline.cpp, the fast kernels and the
+// GPU program generator: stage tables built from the reference functions.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "encode/kernel/float_lut.hpp"
+#include "encode/pipeline.hpp"
+
+namespace hdrd::detail {
+
+// How the tone stage runs in the fast path.
+enum class ToneKind {
+  clip,         // exact: min(x * paper_white, peak) per channel
+  per_channel,  // value LUT per channel
+  ratio,        // ratio LUT of max(RGB) or luminance, applied to all channels
+  reference,    // per-pixel reference (RGB operators such as AgX, the ICtCp mapper)
+  none,         // a baked grade holds the tone curve
+};
+
+struct ToneStage {
+  ToneKind kind = ToneKind::reference;
+  bool ratio_of_luminance = false;  // ratio: luminance instead of max(RGB)
+  FloatBitsLut lut;                 // per_channel: nits(x); ratio: nits(m)/m
+  float paper_white = 203, peak = 1000;
+};
+
+// Encoding of container-primaries display nits into the mode's signal.
+struct SignalStage {
+  Mode mode = Mode::hdr10;
+  FloatBitsLut signal;              // nits -> E' (pq, srgb, gamma 2.2, BT.1886); HLG: E -> E'
+  FloatBitsQuantizer codes;         // nits -> code, exact (not HLG, whose signal is not of nits alone)
+  float code_scale = 1023, code_offset = 0;  // code = E' * scale + offset (before rounding)
+  int max_code = 1023;
+  float hlg_peak = 1000, hlg_gamma = 1.2f;
+  std::vector<float> code_to_nits;  // for MaxCLL/MaxFALL: decoded display light per code
+  // HDR10 at 10 bits: code_to_nits as a least-squares quartic per 32 codes in
+  // t = code % 32, coefficient i of segment s at [32 i + s] (the SIMD MaxFALL sum), and
+  // its largest error over all codes, evaluated in float as the kernel does; empty when
+  // that error is above kCodeLightFitTolerance.
+  std::vector<float> code_nits_poly;
+  double code_nits_poly_error = 0;
+};
+// The largest error of code_nits_poly kept (nits): MaxFALL is reported in whole nits.
+inline constexpr double kCodeLightFitTolerance = 1e-3;
+
+ToneStage build_tone_stage(const PreparedPipeline& p);
+SignalStage build_signal_stage(const DisplayTarget& t);
+// The same, from a small process-wide cache: the tables depend only on the curve, its
+// parameters and the display (exposure is folded into the input matrix), so a sequence
+// or a daemon re-preparing every frame builds them once.
+std::shared_ptr<const ToneStage> cached_tone_stage(const PreparedPipeline& p);
+std::shared_ptr<const SignalStage> cached_signal_stage(const DisplayTarget& t);
+
+// Reference helpers (double precision).
+color::Vec3 sanitize(color::Vec3 v);
+color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMapping g);
+color::Mat3 working_to_container(const DisplayTarget& t);
+// The container range accepted without gamut mapping: [-tol, peak (1 + tol)] with a
+// tolerance for float rounding of in-gamut colours (values inside are clamped).
+inline constexpr double kGamutTolerance = 1e-4;
+inline float gamut_low(const DisplayTarget& t) { return static_cast<float>(-kGamutTolerance * t.peak_nits); }
+inline float gamut_high(const DisplayTarget& t) { return static_cast<float>(t.peak_nits * (1 + kGamutTolerance)); }
+
+// Converts float <-> IEEE half (round to nearest even).
+std::uint16_t float_to_half(float f);
+float half_to_float(std::uint16_t h);
+
+}  // namespace hdrd::detail

@@ -1,0 +1,156 @@
+// The fast encode path against the staged (reference-table) path: the fused kernel on every
+// SIMD target this CPU runs.
+#include <gtest/gtest.h>
+#include <hwy/targets.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "encode/pipeline.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
+#include "encode/colour/transfer.hpp"
+
+using namespace hdrd;
+
+namespace {
+
+std::array<int, 3> codes_at(const EncodedFrame& f, std::size_t i) {
+  std::uint32_t w;
+  std::memcpy(&w, f.data.data() + i * 4, 4);
+  return {static_cast<int>(w & 1023), static_cast<int>((w >> 10) & 1023), static_cast<int>((w >> 20) & 1023)};
+}
+
+struct Case {
+  Range range;
+  bool half;  // RGBA16F input (the AVX-512 kernel splits it with word permutes), else float
+};
+
+class FusedKernel : public ::testing::TestWithParam<Case> {};
+
+// Every kernel compiled into the binary that this CPU can run (scalar .. AVX-512, whose
+// table lookups use 64-bit pair gathers) encodes HDR10, with a UI, within one code of the
+// staged path, with the same content light: full and narrow range (whose MaxFALL sum keeps
+// the table), float and half input, NaN and Inf pixels included. Odd rows stay below the
+// default curve's knee (about 2x paper white), so whole vectors take the kernel's flat-ratio
+// shortcut; even rows mix the knee, the shoulder and deep shadows in every vector.
+TEST_P(FusedKernel, EveryCompiledTargetMatchesTheStagedPath) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> stops(-24, 7), below_knee(-24, 0.5f);
+  Image img(203, 17);  // odd width: the scalar tail too
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    const bool odd_row = (i / static_cast<std::size_t>(img.width)) % 2 == 1;
+    for (int c = 0; c < 3; ++c) img.rgba[i * 4 + c] = std::exp2(odd_row ? below_knee(rng) : stops(rng));
+    img.rgba[i * 4 + 3] = 1;
+  }
+  img.rgba[0] = 0, img.rgba[1] = 0, img.rgba[2] = 0;  // true black
+  img.rgba[4 * 40] = std::numeric_limits<float>::quiet_NaN();
+  img.rgba[4 * 77 + 1] = std::numeric_limits<float>::infinity();
+  img.rgba[4 * 150 + 2] = -std::numeric_limits<float>::infinity();
+  ImageHalf half(img.width, img.height);
+  for (std::size_t i = 0; i < img.rgba.size(); ++i) {
+    half.rgba[i] = detail::float_to_half(img.rgba[i]);
+    img.rgba[i] = detail::half_to_float(half.rgba[i]);  // both inputs hold the same values
+  }
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 40;
+  overlay->height = 5;
+  for (int i = 0; i < 200; ++i) overlay->rgba.insert(overlay->rgba.end(), {1.0f, 0.3f, 0.0f, (i % 3) / 2.0f});
+  EncodeSettings s;
+  s.target = default_target(Mode::hdr10);
+  s.target.range = GetParam().range;
+  s.threads = 1;
+  s.ui.overlay = overlay;
+  s.ui.x = 30, s.ui.y = 6;
+  SceneInput in;
+  if (GetParam().half) in.half = &half;
+  else in.image = &img;
+  auto staged = s;
+  staged.keep_display_nits = true;  // forces the staged path
+  const auto want = encode_frame(in, staged);
+  ASSERT_TRUE(want.ok());
+  hwy::SetSupportedTargetsForTest(0);  // all of them, whatever an earlier failure left
+  const auto targets = hwy::SupportedAndGeneratedTargets();
+  EXPECT_GE(targets.size(), 2u);
+  for (const auto target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    const auto got = encode_frame(in, s);
+    ASSERT_TRUE(got.ok());
+    int off = 0;
+    for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+      const auto a = codes_at(*got, i), b = codes_at(*want, i);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_LE(std::abs(a[c] - b[c]), 1) << hwy::TargetName(target) << " pixel " << i << " channel " << c
+                                             << ": " << a[c] << " vs " << b[c] << " (input " << img.rgba[i * 4] << ", "
+                                             << img.rgba[i * 4 + 1] << ", " << img.rgba[i * 4 + 2] << ")";
+        off += a[c] != b[c];
+      }
+    }
+    EXPECT_LT(off, static_cast<int>(img.pixel_count() * 3 / 200)) << hwy::TargetName(target);
+    const int black = GetParam().range == Range::narrow ? 64 : 0;
+    EXPECT_EQ(codes_at(*got, 0), (std::array<int, 3>{black, black, black})) << hwy::TargetName(target);
+    EXPECT_NEAR(got->content_light.max_cll_nits, want->content_light.max_cll_nits, 1e-3) << hwy::TargetName(target);
+    EXPECT_NEAR(got->content_light.max_fall_nits, want->content_light.max_fall_nits,
+                want->content_light.max_fall_nits * 1e-3)
+        << hwy::TargetName(target);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
+// The HDR10 kernel drops the quantiser's upper clamp only when no code input can pass the
+// table's top (16384 cd/m2): the peak plus the brightest UI light. A 10 000 cd/m2 display
+// with a 10 000 cd/m2 UI over it can reach ~20 000 where the UI is translucent, so that
+// frame keeps the clamped kernel: its codes still match the staged path, top code included.
+TEST(FusedKernel, BrightUiOverABrightDisplayKeepsItsCodes) {
+  Image img(96, 4);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    const float v = std::exp2(-4.0f + 0.2f * static_cast<float>(i % 96));  // up to ~2^15 x paper white
+    img.rgba[i * 4] = v, img.rgba[i * 4 + 1] = v * 0.5f, img.rgba[i * 4 + 2] = v * 0.25f, img.rgba[i * 4 + 3] = 1;
+  }
+  ImageHalf half(img.width, img.height);
+  for (std::size_t i = 0; i < img.rgba.size(); ++i) half.rgba[i] = detail::float_to_half(img.rgba[i]);
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 96;
+  overlay->height = 2;
+  for (int i = 0; i < 192; ++i) overlay->rgba.insert(overlay->rgba.end(), {1.0f, 1.0f, 1.0f, (i % 4) / 3.0f});
+  for (const double peak : {1000.0, 10000.0}) {
+    EncodeSettings s;
+    s.target = default_target(Mode::hdr10);
+    s.target.peak_nits = peak;
+    s.target.ui_white_nits = 10000;
+    s.threads = 1;
+    s.ui.overlay = overlay;
+    s.ui.y = 1;
+    SceneInput in;
+    in.half = &half;
+    auto staged = s;
+    staged.keep_display_nits = true;
+    const auto want = encode_frame(in, staged);
+    const auto got = encode_frame(in, s);
+    ASSERT_TRUE(want.ok() && got.ok());
+    int top = 0;
+    for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+      const auto a = codes_at(*got, i), b = codes_at(*want, i);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_LE(std::abs(a[c] - b[c]), 1) << "peak " << peak << " pixel " << i;
+      }
+      top += a[0] == 1023;
+    }
+    if (peak == 10000) {
+      EXPECT_GT(top, 0);  // the UI over the brightest pixels reaches the top code
+    }
+    EXPECT_NEAR(got->content_light.max_cll_nits, want->content_light.max_cll_nits, 1e-3) << peak;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Inputs, FusedKernel,
+                         ::testing::Values(Case{Range::full, false}, Case{Range::full, true}, Case{Range::narrow, false},
+                                           Case{Range::narrow, true}),
+                         [](const auto& i) {
+                           return std::string(i.param.range == Range::full ? "full" : "narrow") +
+                                  (i.param.half ? "_half" : "_float");
+                         });
+
+}  // namespace

@@ -1,0 +1,68 @@
+// The GPU program description (no GL here; tests/shading runs it on llvmpipe).
+#include <gtest/gtest.h>
+
+#include "encode/kernel/gpu_program.hpp"
+
+using namespace hdrd;
+
+namespace {
+
+PreparedPipeline prepare(Mode m, const std::string& curve, Image& img) {
+  EncodeSettings s;
+  s.target = default_target(m);
+  s.tone.curve = curve;
+  SceneInput in;
+  in.image = &img;
+  return prepare_pipeline(in, s).value();
+}
+
+TEST(GpuProgram, TablesAreTheCpuTablesAndFitATextureRow) {
+  Image img(2, 2);
+  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::sdr, Mode::sdr_bt1886, Mode::scrgb}) {
+    const auto p = prepare(m, "pq-shoulder", img);
+    const auto prog = gpu::make_encode_program(p);
+    ASSERT_TRUE(prog.supported) << prog.unsupported_reason;
+    EXPECT_NE(prog.glsl.find("uvec4 hdrd_encode(vec3 rgb, ivec2 pixel)"), std::string::npos);
+    EXPECT_NE(prog.glsl.find("layout(std140, binding = 3) uniform HdrdEncode"), std::string::npos);
+    for (const auto& t : prog.tables) {
+      EXPECT_LE(t.data.size(), 16384u) << t.sampler;
+      EXPECT_NE(prog.glsl.find(t.sampler), std::string::npos);
+    }
+    EXPECT_EQ(prog.tables.size(), m == Mode::scrgb ? 1u : 2u);
+    EXPECT_FLOAT_EQ(prog.uniforms.paper_white, static_cast<float>(p.settings.target.paper_white_nits));
+    // mat3 column 0 = first column of (to_working * scene_scale).
+    EXPECT_FLOAT_EQ(prog.uniforms.m_in[1], static_cast<float>(p.input_to_working.m[1][0] * p.scene_scale));
+  }
+}
+
+TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
+  Image img(2, 2);
+  for (const char* c : {"agx", "pbr-neutral", "ictcp"}) {
+    const auto prog = gpu::make_encode_program(prepare(Mode::hdr10, c, img));
+    EXPECT_FALSE(prog.supported) << c;
+    EXPECT_NE(prog.unsupported_reason.find(c), std::string::npos);
+  }
+  EXPECT_TRUE(gpu::make_encode_program(prepare(Mode::hdr10, "clip", img)).supported);
+  // Curves applied to luminance may leave the gamut: the CPU gamut-maps them.
+  for (const char* c : {"reinhard", "drago"}) {
+    const auto prog = gpu::make_encode_program(prepare(Mode::hdr10, c, img));
+    EXPECT_FALSE(prog.supported) << c;
+    EXPECT_NE(prog.unsupported_reason.find("luminance"), std::string::npos) << prog.unsupported_reason;
+  }
+}
+
+TEST(GpuProgram, ReadbackBuildsTheFrameAndMeasuresLight) {
+  Image img(2, 1);
+  const auto p = prepare(Mode::hdr10, "clip", img);
+  auto prog = gpu::make_encode_program(p);
+  prog.target_format = gpu::TargetFormat::r32ui;
+  // Two pixels, bottom-up rows: codes 594 (203 cd/m2) and 769 (1000 cd/m2) grey.
+  auto word = [](std::uint32_t c) { return c | (c << 10) | (c << 20) | (3u << 30); };
+  const std::uint32_t px[2] = {word(594), word(769)};
+  auto f = gpu::frame_from_readback(p, prog, 2, 1, px, true);
+  ASSERT_TRUE(f.ok());
+  EXPECT_NEAR(f->content_light.max_cll_nits, 1000, 1.5);
+  EXPECT_NEAR(f->content_light.max_fall_nits, (1000 + 203) / 2.0, 1.5);
+}
+
+}  // namespace
