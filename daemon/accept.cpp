@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <optional>
 #include <vector>
+
+#include <fmt/format.h>
 
 namespace hdrd::daemon {
 namespace {
@@ -67,44 +70,35 @@ double quality(const std::vector<MediaRange>& ranges, std::string_view type) {
   return q;
 }
 
-}  // namespace
-
-std::string_view content_type(OutputKind k) {
-  switch (k) {
-    case OutputKind::png: return "image/png";
-    case OutputKind::exr: return "image/x-exr";
-    case OutputKind::raw: return "application/octet-stream";
-    case OutputKind::json_dump: return "application/json";
-  }
-  return "application/octet-stream";
+std::vector<MediaRange> ranges_of(const std::string* accept) {
+  const bool has_accept = accept && !trim_lower(*accept).empty();
+  return has_accept ? parse_accept(*accept) : std::vector<MediaRange>{{"*", "*", 1.0}};
 }
 
-Result<OutputKind> negotiate_output(const std::string* accept, Mode mode, bool dump) {
-  const bool has_accept = accept && !trim_lower(*accept).empty();
-  const auto ranges = has_accept ? parse_accept(*accept) : std::vector<MediaRange>{{"*", "*", 1.0}};
-  if (dump) {
-    if (quality(ranges, "application/json") > 0) return OutputKind::json_dump;
-    return make_error("request.not_acceptable",
-                      "with \"dump\": true the answer is JSON; Accept does not allow application/json", "dump");
-  }
-  // Our preference order breaks ties: the mode's natural image format first.
-  std::vector<OutputKind> order = {OutputKind::png, OutputKind::exr, OutputKind::raw};
-  if (mode == Mode::scrgb) order = {OutputKind::exr, OutputKind::raw};
-  OutputKind best = order.front();
+}  // namespace
+
+Result<void> accepts_json(const std::string* accept) {
+  if (quality(ranges_of(accept), "application/json") > 0) return {};
+  return make_error("request.not_acceptable", "with \"dump\": true the answer is JSON; Accept does not allow application/json",
+                    "dump");
+}
+
+Result<job::Output> negotiate_output(const std::string* accept, Mode mode) {
+  const auto ranges = ranges_of(accept);
+  std::optional<job::Output> best;
   double best_q = 0;
-  for (OutputKind k : order) {
-    const double q = quality(ranges, content_type(k));
-    if (q > best_q) {
-      best_q = q;
-      best = k;
-    }
+  std::string offered;
+  for (const auto& o : job::outputs()) {
+    if (!o.reply || !job::applies(o, job::Source::render, mode)) continue;
+    offered += (offered.empty() ? "" : ", ") + std::string(o.content_type);
+    const double q = quality(ranges, o.content_type);
+    if (q > best_q) best_q = q, best = o.id;
   }
-  if (best_q > 0) return best;
-  if (mode == Mode::scrgb && quality(ranges, "image/png") > 0)
-    return make_error("request.not_acceptable", "scrgb has no PNG form: ask for image/x-exr or application/octet-stream",
-                      "display.mode");
-  return make_error("request.not_acceptable",
-                    "Accept allows none of image/png, image/x-exr, application/octet-stream (raw DRM buffer)", "");
+  if (best) return *best;
+  if (!mode_info(mode).png && quality(ranges, "image/png") > 0)
+    return make_error("request.not_acceptable",
+                      fmt::format("{} has no PNG form: ask for {}", to_string(mode), offered), "display.mode");
+  return make_error("request.not_acceptable", fmt::format("Accept allows none of {}", offered), "");
 }
 
 }  // namespace hdrd::daemon

@@ -12,17 +12,13 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/api_support.hpp"
-#include "daemon/output.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
-#include "encode/io/io.hpp"
-#include "encode/pipeline.hpp"
-#include "encode/tone/tonemap.hpp"
-
-#if defined(HDRD_DISPLAY_AVAILABLE) && __has_include("display/displays.hpp")
 #include "display/displays.hpp"
-#define HDRD_HAVE_DISPLAYS 1
-#endif
+#include "encode/tone/tonemap.hpp"
+#include "job/outputs.hpp"
+#include "job/settings.hpp"
+#include "shading/scene_loader.hpp"
 
 #ifndef HDRD_DAEMON_VERSION
 #define HDRD_DAEMON_VERSION "0"
@@ -66,166 +62,11 @@ bool same_secret(std::string_view a, std::string_view b) {
   return diff == 0;
 }
 
-std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 1469598103934665603ull) {
-  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
 std::string endpoint_label(const HttpRequest& r) {
   for (auto p : {"/v1/status", "/v1/capabilities", "/v1/displays", "/metrics", "/v1/render", "/v1/encode",
                  "/v1/pattern", "/v1/selftest"})
     if (r.path == p) return p;
   return "other";
-}
-
-// Everything a render job carries from the render worker to the encode pool.
-struct RenderJobState {
-  Request request;
-  OutputKind output = OutputKind::png;
-  std::string dump_name;
-  std::shared_ptr<const Config> config;
-#ifdef HDRD_HAVE_RENDERER
-  shading::RenderResult rendered;
-#endif
-  double render_s = 0;
-};
-
-struct EncodeJobState {
-  Request request;
-  OutputKind output = OutputKind::png;
-  std::string dump_name;
-  std::shared_ptr<const Config> config;
-  std::string exr;  // the uploaded file
-};
-
-int encode_threads_per_job(const Config& c) {
-  const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
-  return std::max(1, hw / std::max(1, c.workers.encode_threads));
-}
-
-// Encodes a scene-referred input and answers in the negotiated form.
-Reply encode_and_reply(const SceneInput& in, const Request& req, OutputKind output, const std::string& dump_name,
-                       const Config& cfg, exposure::Mode default_exposure, std::vector<std::string> warnings,
-                       json extra_settings, Metrics& metrics) {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto target = resolve_display(req.display, &warnings);
-  if (!target) return Reply::error(target.error());
-  auto settings = build_encode_settings(req, *target, default_exposure, encode_threads_per_job(cfg), &warnings);
-  if (!settings) return Reply::error(settings.error());
-  settings->keep_display_nits = needs_display_nits(req, output);
-  auto frame = encode_frame(in, *settings);
-  if (!frame) return Reply::error(frame.error());
-  for (auto& [k, v] : extra_settings.items()) frame->settings[k] = v;
-  const double encode_s = seconds_since(t0);
-  metrics.stage_time("encode", encode_s);
-  const auto t1 = std::chrono::steady_clock::now();
-  auto reply = answer_frame(*frame, req, output, cfg.paths.dump_dir, dump_name, warnings);
-  if (!reply) return Reply::error(reply.error());
-  metrics.stage_time("serialize", seconds_since(t1));
-  reply->headers.emplace_back("X-Hdrd-Encode-Ms", fmt::format("{:.1f}", encode_s * 1e3));
-  return std::move(*reply);
-}
-
-#ifdef HDRD_HAVE_RENDERER
-// The renderer's request for a validated daemon request.
-shading::RenderRequest to_render_request(const Request& q, const Config& cfg) {
-  shading::RenderRequest rq;
-  switch (q.scene.kind) {
-    case SceneSpec::Kind::builtin: rq.scene = q.scene.name; break;
-    case SceneSpec::Kind::inline_json: rq.scene_json = q.scene.inline_scene; break;
-    case SceneSpec::Kind::scene_file:
-    case SceneSpec::Kind::gltf: rq.scene = q.scene.path.string(); break;
-  }
-  rq.width = q.width;
-  rq.height = q.height;
-  rq.samples = std::min(q.samples, shading::kMaxSamples);
-  const auto vec = [](const std::array<double, 3>& v) { return shading::Vec3{v[0], v[1], v[2]}; };
-  if (q.camera.position || q.camera.target || q.camera.fov_y_deg) {
-    shading::CameraOverride cam;
-    if (q.camera.position) cam.position = vec(*q.camera.position);
-    if (q.camera.target) cam.target = vec(*q.camera.target);
-    cam.yfov_deg = q.camera.fov_y_deg;
-    rq.camera = cam;
-  }
-  // Files named by a request were resolved inside the asset root; JSON scenes may not
-  // reach further files (their paths are not checked against the root).
-  rq.load.allow_files = false;
-  rq.load.base_dir = cfg.paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg.paths.asset_root;
-  rq.load.limits.max_lights = cfg.limits.max_lights;
-  return rq;
-}
-
-// Render stage (on a render worker, with its renderer): the scene-referred frame.
-Result<void> render_stage(RenderJobState& st, RenderResource* res, Metrics& metrics) {
-  auto* rr = dynamic_cast<RendererResource*>(res);
-  if (!rr) return make_error("renderer.unavailable", "renderer not available on this worker");
-  const Request& q = st.request;
-  const shading::RenderRequest rq = to_render_request(q, *st.config);
-  const auto t0 = std::chrono::steady_clock::now();
-  auto r = rr->renderer->render(rq);
-  if (!r) {
-    Error e = r.error();
-    // Fields inside an inline scene are reported relative to the request.
-    if (q.scene.kind == SceneSpec::Kind::inline_json && !e.field.empty() && e.field.rfind("scene", 0) != 0)
-      e.field = "scene." + e.field;
-    return e;
-  }
-  st.rendered = std::move(*r);
-  st.render_s = seconds_since(t0);
-  metrics.stage_time("render", st.render_s);
-  return {};
-}
-
-// Encode stage (on the encode pool): exposure, tone curve, encoding, the reply.
-Reply render_finish(RenderJobState& st, Metrics& metrics) {
-  const auto& rd = st.rendered;
-  SceneInput in;
-  in.image = &rd.scene_nits;
-  in.to_working = color::to_working(color::Space::rec709);
-  in.units = InputUnits::absolute;
-  in.white_luminance_nits = 1.0;
-  if (rd.dominant_illuminance_lux > 0) in.illuminance_lux = rd.dominant_illuminance_lux;
-  // Renders are absolute light: meter the lighting (RTR4: incident metering) when the
-  // scene has a light, else the log-average of the frame.
-  const auto default_exposure =
-      rd.dominant_illuminance_lux > 0 ? exposure::Mode::light : exposure::Mode::log_average;
-  json extra = {{"render",
-                 {{"scene", rd.scene_name}, {"backend", rd.backend}, {"gl_renderer", rd.gl_renderer},
-                  {"samples", rd.samples}, {"render_ms", rd.render_ms},
-                  {"dominant_illuminance_lux", rd.dominant_illuminance_lux}}}};
-  Reply reply = encode_and_reply(in, st.request, st.output, st.dump_name, *st.config, default_exposure,
-                                 rd.warnings, extra, metrics);
-  reply.headers.emplace_back("X-Hdrd-Render-Ms", fmt::format("{:.1f}", st.render_s * 1e3));
-  reply.headers.emplace_back("X-Hdrd-Scene", rd.scene_name);
-  reply.headers.emplace_back("X-Hdrd-Backend", rd.backend);
-  return reply;
-}
-
-#endif
-
-// /v1/encode's only stage (on the encode pool): decode the upload, encode, reply.
-Reply encode_finish(EncodeJobState& st, const JobControl& control, Metrics& metrics) {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto exr = io::read_exr_memory(
-      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(st.exr.data()), st.exr.size()));
-  if (!exr) return Reply::error(exr.error());
-  metrics.stage_time("decode", seconds_since(t0));
-  if (control.should_stop()) return Reply::error(make_error("request.cancelled", "cancelled"));
-  SceneInput in;
-  in.image = &exr->image;
-  in.to_working = exr->to_working();
-  // REFERENCE.md §1.1: relative unless the file has whiteLuminance or the request says.
-  const auto& q = st.request;
-  in.units = q.input.empty() ? (exr->white_luminance ? InputUnits::absolute : InputUnits::relative)
-                             : *parse_input_units(q.input);
-  in.white_luminance_nits = exr->white_luminance.value_or(1.0);
-  std::vector<std::string> warnings = exr->warnings;
-  if (in.units == InputUnits::absolute && !exr->white_luminance)
-    warnings.push_back("input absolute without whiteLuminance: values are taken as cd/m2");
-  json extra = {{"input", {{"units", to_string(in.units)}, {"white_luminance_nits", in.white_luminance_nits},
-                           {"channels", exr->channels}, {"bytes", st.exr.size()}}}};
-  return encode_and_reply(in, q, st.output, st.dump_name, *st.config, exposure::Mode::manual, warnings, extra,
-                          metrics);
 }
 
 }  // namespace
@@ -393,16 +234,31 @@ void Service::get_status(HttpRequest&, std::shared_ptr<Responder> responder) {
   responder->reply(json_reply(status_json()));
 }
 
+namespace {
+
+std::vector<std::string> choices_of(std::string_view path) {
+  const job::Setting* s = job::find_setting(path);
+  return std::vector<std::string>(s->choices.begin(), s->choices.end());
+}
+
+}  // namespace
+
+// Everything here comes from the tables the request parser uses (settings, modes, outputs,
+// curves, patterns), so what is published is what is accepted.
 void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responder) {
   const auto cfg = config();
   json modes = json::array();
-  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::scrgb, Mode::sdr, Mode::sdr_bt1886}) {
-    const DisplayTarget t = default_target(m);
-    modes.push_back({{"name", to_string(m)}, {"peak_nits", t.peak_nits}, {"black_nits", t.black_nits},
-                     {"paper_white_nits", t.paper_white_nits}, {"range", to_string(t.range)}, {"bits", t.bits},
-                     {"default_tone_curve", tonemap::default_curve(m)},
-                     {"formats", m == Mode::scrgb ? json{"image/x-exr", "application/octet-stream"}
-                                                  : json{"image/png", "image/x-exr", "application/octet-stream"}}});
+  for (const auto& m : hdrd::modes()) {
+    const DisplayTarget t = default_target(m.mode);
+    json types = json::array();
+    for (const auto& o : job::outputs())
+      if (o.reply && job::applies(o, job::Source::render, m.mode)) types.push_back(o.content_type);
+    json bits = json::array();
+    for (int b : m.bits) bits.push_back(b);
+    modes.push_back({{"name", m.name}, {"description", m.description}, {"peak_nits", t.peak_nits},
+                     {"black_nits", t.black_nits}, {"paper_white_nits", t.paper_white_nits},
+                     {"range", to_string(t.range)}, {"bits", t.bits}, {"allowed_bits", bits}, {"hdr", m.hdr},
+                     {"default_tone_curve", tonemap::default_curve(m.mode)}, {"formats", types}});
   }
   json curves = json::array();
   for (const auto& c : tonemap::curves()) {
@@ -414,27 +270,30 @@ void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responde
                       {"default_apply", tonemap::to_string(c.default_apply)}, {"scalar", c.scalar},
                       {"has_inverse", c.has_inverse}, {"keeps_reference_white", c.keeps_reference_white}});
   }
-  json exposure_modes = json::array();
-  for (auto m : {exposure::Mode::manual, exposure::Mode::camera, exposure::Mode::log_average, exposure::Mode::histogram,
-                 exposure::Mode::light})
-    exposure_modes.push_back(exposure::to_string(m));
-  json scenes = json::array();
-#ifdef HDRD_HAVE_RENDERER
-  for (const auto& s : shading::builtin_scene_names()) scenes.push_back(s);
-#endif
+  json outputs = json::array();
+  for (const auto& o : job::outputs())
+    outputs.push_back({{"name", o.name}, {"suffix", o.suffix}, {"content_type", o.content_type}, {"doc", o.doc},
+                       {"reply", o.reply}, {"in_default_dump", o.in_default_dump}});
+  json output_types = json::array();
+  for (const auto& o : job::outputs())
+    if (o.reply && std::find(output_types.begin(), output_types.end(), o.content_type) == output_types.end())
+      output_types.push_back(o.content_type);
+  output_types.push_back("application/json");
   const auto& l = cfg->limits;
   json j = {
       {"api_version", 1},
+      {"settings", job::settings_json()},
       {"modes", modes},
       {"tone_curves", curves},
-      {"tone_apply", {"per-channel", "max-rgb", "luminance", "rgb"}},
-      {"exposure_modes", exposure_modes},
-      {"gamut_mapping", {"ictcp", "clip"}},
-      {"grade", {{"placements", {"scene", "display", "baked"}}, {"shapers", {"pq", "log2", "sqrt", "sqrt-sqrt", "none"}}}},
-      {"output_types", {"image/png", "image/x-exr", "application/octet-stream", "application/json"}},
-      {"dump_formats", {"png", "exr", "raw"}},
-      {"scenes", scenes},
-      {"default_scene", cfg->render.scene},
+      {"tone_apply", choices_of("tone.apply")},
+      {"exposure_modes", choices_of("exposure.mode")},
+      {"gamut_mapping", choices_of("gamut")},
+      {"grade", {{"placements", choices_of("grade.placement")}, {"shapers", {"pq", "log2", "sqrt", "sqrt-sqrt", "none"}}}},
+      {"outputs", outputs},
+      {"output_types", output_types},
+      {"dump_formats", job::output_names()},
+      {"scenes", shading::builtin_scene_names()},
+      {"default_scene", job::find_setting("scene")->default_value()},
       {"renderer_available", scheduler_ && scheduler_->renderer_available()},
       {"limits",
        {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},
@@ -450,7 +309,6 @@ void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responde
 }
 
 void Service::get_displays(HttpRequest&, std::shared_ptr<Responder> responder) {
-#ifdef HDRD_HAVE_DISPLAYS
   auto overrides = display::load_default_overrides();
   const auto report = display::enumerate_displays(overrides ? *overrides : std::vector<display::ProfileOverride>{});
   json j = display::to_json(report);
@@ -458,10 +316,6 @@ void Service::get_displays(HttpRequest&, std::shared_ptr<Responder> responder) {
   if (auto chosen = display::choose_auto_profile(report)) j["auto"] = display::profile_to_json(*chosen);
   else j["auto"] = nullptr;
   responder->reply(json_reply(j));
-#else
-  responder->reply(json_reply({{"connectors", json::array()},
-                               {"note", "display queries are not available in this build (hdrd_display)"}}));
-#endif
 }
 
 void Service::get_metrics(HttpRequest&, std::shared_ptr<Responder> responder) {
@@ -482,105 +336,18 @@ void Service::get_metrics(HttpRequest&, std::shared_ptr<Responder> responder) {
   responder->reply(std::move(r));
 }
 
-// ---- POST /v1/render --------------------------------------------------------------------
+}  // namespace hdrd::daemon
 
-void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responder) {
-  const auto cfg = config();
-  if (auto bad = check_json_post(http)) return responder->reply(Reply::error(*bad));
-  ParseContext ctx{Endpoint::render, cfg->limits, cfg->render, cfg->paths.asset_root};
-  auto req = parse_request(http.body, ctx);
-  if (!req) return responder->reply(Reply::error(req.error()));
-  auto output = negotiate_output(http.header("accept"), req->display.target.mode, req->dump);
-  if (!output) return responder->reply(Reply::error(output.error()));
-#ifndef HDRD_HAVE_RENDERER
-  responder->reply(Reply::error(make_error("renderer.unavailable", "renderer not available in this build")));
-#else
-  if (req->scene.kind == SceneSpec::Kind::builtin && !shading::is_builtin_scene(req->scene.name)) {
-    std::string names;
-    for (const auto& n : shading::builtin_scene_names()) names += (names.empty() ? "" : ", ") + n;
-    return responder->reply(Reply::error(
-        make_error("request.value", fmt::format("scene: no built-in scene '{}' (one of: {})", req->scene.name, names),
-                   "scene")));
-  }
-  auto st = std::make_shared<RenderJobState>();
-  st->request = std::move(*req);
-  st->output = *output;
-  st->config = cfg;
-  st->dump_name = st->request.name.empty() ? generated_name("render", http.id) : st->request.name;
-  JobSpec spec;
-  spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
-  if (!st->request.dump) spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output));
-  Metrics* metrics = &metrics_;
-  spec.render = [st, metrics](RenderResource* res, const JobControl&) { return render_stage(*st, res, *metrics); };
-  spec.finish = [st, metrics](const JobControl&) { return render_finish(*st, *metrics); };
-  submit(std::move(spec), true, responder);
-#endif
+namespace hdrd::daemon {
+
+void Service::post_render(HttpRequest& r, std::shared_ptr<Responder> responder) {
+  post_frame(job::Source::render, r, std::move(responder));
 }
-
-// ---- POST /v1/encode --------------------------------------------------------------------
-
-void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responder) {
-  const auto cfg = config();
-  json options = json::object();
-  std::string exr;
-  if (http.multipart) {
-    if (!http.query.empty())
-      return responder->reply(Reply::error(make_error(
-          "request.conflict", "multipart uploads carry their options in the 'request' part, not the query string",
-          http.query[0].first.substr(0, 64))));
-    bool have_image = false;
-    for (auto& p : http.parts) {
-      if (p.name == "image" && !have_image) {
-        exr = std::move(p.data);
-        have_image = true;
-      } else if (p.name == "request") {
-        options = json::parse(p.data, nullptr, false);
-        if (options.is_discarded() || !options.is_object())
-          return responder->reply(Reply::error(make_error("request.syntax", "the 'request' part is not a JSON object",
-                                                          "request")));
-      } else {
-        return responder->reply(Reply::error(make_error(
-            "request.unknown_field", fmt::format("multipart part '{}': expected 'image' and 'request'", p.name.substr(0, 64)),
-            p.name.substr(0, 64))));
-      }
-    }
-    if (!have_image)
-      return responder->reply(Reply::error(make_error("request.value", "multipart body has no 'image' part (the EXR)",
-                                                      "image")));
-  } else {
-    const std::string mt = media_type(http);
-    if (mt != "image/x-exr" && mt != "application/octet-stream" && mt != "image/aces")
-      return responder->reply(Reply::error(make_error(
-          "request.media_type",
-          "POST /v1/encode takes an OpenEXR body (Content-Type: image/x-exr) or multipart/form-data")));
-    auto q = query_to_request_json(http.query);
-    if (!q) return responder->reply(Reply::error(q.error()));
-    options = std::move(*q);
-    exr = std::move(http.body);
-  }
-  if (exr.empty()) return responder->reply(Reply::error(make_error("request.value", "empty EXR upload", "image")));
-  if (json_nesting_depth(options.dump()) > cfg->limits.max_json_depth)
-    return responder->reply(Reply::error(make_error("request.depth", "request: JSON nested too deeply")));
-  ParseContext ctx{Endpoint::encode, cfg->limits, cfg->render, cfg->paths.asset_root};
-  auto req = parse_request_json(options, ctx);
-  if (!req) return responder->reply(Reply::error(req.error()));
-  auto output = negotiate_output(http.header("accept"), req->display.target.mode, req->dump);
-  if (!output) return responder->reply(Reply::error(output.error()));
-
-  auto st = std::make_shared<EncodeJobState>();
-  st->request = std::move(*req);
-  st->output = *output;
-  st->config = cfg;
-  st->exr = std::move(exr);
-  st->dump_name = st->request.name.empty() ? generated_name("encode", http.id) : st->request.name;
-  JobSpec spec;
-  spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
-  if (!st->request.dump)
-    spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output)) +
-               fmt::format("|exr:{}:{:016x}", st->exr.size(), fnv1a(st->exr));
-  Metrics* metrics = &metrics_;
-  spec.finish = [st, metrics](const JobControl& control) { return encode_finish(*st, control, *metrics); };
-  submit(std::move(spec), false, responder);
+void Service::post_encode(HttpRequest& r, std::shared_ptr<Responder> responder) {
+  post_frame(job::Source::encode, r, std::move(responder));
+}
+void Service::post_pattern(HttpRequest& r, std::shared_ptr<Responder> responder) {
+  post_frame(job::Source::pattern, r, std::move(responder));
 }
 
 }  // namespace hdrd::daemon

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -48,6 +49,11 @@ std::string generated_name(std::string_view prefix, std::uint64_t id) {
 Clock::time_point request_deadline(const HttpRequest& r, std::optional<double> timeout_s, const Config& cfg) {
   const double limit_s = std::min(timeout_s.value_or(cfg.limits.max_request_seconds), cfg.limits.max_request_seconds);
   return r.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
+}
+
+int encode_threads_per_job(const Config& c) {
+  const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, hw / std::max(1, c.workers.encode_threads));
 }
 
 std::string canonical_key(const nlohmann::json& canonical) {

@@ -36,6 +36,9 @@ std::string generated_name(std::string_view prefix, std::uint64_t id);
 // counted from its complete arrival.
 Clock::time_point request_deadline(const HttpRequest& r, std::optional<double> timeout_s, const Config& cfg);
 
+// Threads each encode job uses: the hardware threads shared among [workers] encode_threads.
+int encode_threads_per_job(const Config& c);
+
 // The coalescing key of a canonical request (strings from query parameters may hold
 // invalid UTF-8; they are replaced rather than thrown over).
 std::string canonical_key(const nlohmann::json& canonical);

@@ -1,4 +1,5 @@
 #include "daemon/config.hpp"
+#include "encode/image.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -97,7 +98,12 @@ Config parse_config(std::string_view text, const std::string& source) {
     config_fail(fmt::format("{}:{}", source, e.source().begin.line), std::string(e.description()), "");
   }
   for (auto&& [k, v] : root) {
-    static const std::set<std::string> kSections = {"server", "workers", "paths", "limits", "render", "log"};
+    if (k.str() == "render")
+      config_fail(where(source, v),
+                  "[render] is gone: a request's defaults (scene, size, samples) are the settings table's, the same "
+                  "for hdrd and the daemon (docs/settings.md)",
+                  "render");
+    static const std::set<std::string> kSections = {"server", "workers", "paths", "limits", "log"};
     if (!kSections.count(std::string(k.str())))
       config_fail(where(source, v), fmt::format("unknown section [{}]", k.str()), std::string(k.str()));
   }
@@ -148,13 +154,6 @@ Config parse_config(std::string_view text, const std::string& source) {
   limits.read("max_request_seconds", c.limits.max_request_seconds);
   limits.finish();
 
-  Section render(root, "render", source);
-  render.read("default_scene", c.render.scene);
-  render.read("default_width", c.render.width);
-  render.read("default_height", c.render.height);
-  render.read("default_samples", c.render.samples);
-  render.finish();
-
   Section log(root, "log", source);
   log.read("level", c.log.level);
   log.read("access_log", c.log.access_log);
@@ -199,13 +198,6 @@ void validate_config(const Config& c) {
   need(l.max_upload_bytes >= 1024, "limits.max_upload_bytes", "must be >= 1024");
   need(l.max_json_depth >= 4 && l.max_json_depth <= 256, "limits.max_json_depth", "must be 4..256");
   need(l.max_request_seconds > 0, "limits.max_request_seconds", "must be > 0");
-  need(c.render.width >= 1 && c.render.width <= l.max_width, "render.default_width", "must be within limits.max_width");
-  need(c.render.height >= 1 && c.render.height <= l.max_height, "render.default_height",
-       "must be within limits.max_height");
-  need(std::int64_t(c.render.width) * c.render.height <= l.max_pixels, "render.default_width",
-       "x default_height exceeds limits.max_pixels");
-  need(c.render.samples >= 1 && c.render.samples <= l.max_samples, "render.default_samples",
-       "must be within limits.max_samples");
   static const std::set<std::string> kLevels = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   need(kLevels.count(c.log.level) > 0, "log.level", "must be one of trace, debug, info, warn, error, critical, off");
   if (!c.server.tcp_listen.empty())
@@ -235,9 +227,6 @@ nlohmann::json config_json(const Config& c) {
         {"max_samples", l.max_samples}, {"max_lights", l.max_lights}, {"max_body_bytes", l.max_body_bytes},
         {"max_upload_bytes", l.max_upload_bytes}, {"max_ui_bytes", l.max_ui_bytes},
         {"max_json_depth", l.max_json_depth}, {"max_request_seconds", l.max_request_seconds}}},
-      {"render",
-       {{"default_scene", c.render.scene}, {"default_width", c.render.width}, {"default_height", c.render.height},
-        {"default_samples", c.render.samples}}},
       {"log", {{"level", c.log.level}, {"access_log", c.log.access_log}}},
   };
 }

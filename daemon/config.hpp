@@ -1,6 +1,6 @@
 // Daemon configuration: config/hdrd.toml (toml++), then command-line overrides.
 // Start-up may throw (HdrdError with the file, key and reason); SIGHUP re-reads the file
-// and applies what can change at run time (limits, roots, log level, render defaults).
+// and applies what can change at run time (limits, roots, log level).
 #pragma once
 
 #include <filesystem>
@@ -8,9 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "daemon/request.hpp"
+#include "job/request.hpp"
 
 namespace hdrd::daemon {
+
+using job::Limits;
 
 struct ServerConfig {
   std::filesystem::path socket_path;       // empty: $XDG_RUNTIME_DIR/hdrd.sock or /run/hdrd/hdrd.sock
@@ -52,7 +54,6 @@ struct Config {
   WorkerConfig workers;
   PathsConfig paths;
   Limits limits;
-  RenderDefaults render;
   LogConfig log;
   std::filesystem::path source;            // the file it was read from (empty: defaults)
 };

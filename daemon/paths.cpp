@@ -2,7 +2,6 @@
 
 #include <string>
 
-#include "daemon/text.hpp"
 
 namespace fs = std::filesystem;
 

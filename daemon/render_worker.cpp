@@ -4,15 +4,12 @@
 
 namespace hdrd::daemon {
 
-#ifdef HDRD_HAVE_RENDERER
 nlohmann::json RendererResource::info() const {
   const auto& c = renderer->context();
   return {{"backend", renderer->backend_name()}, {"gl_renderer", c.gl_renderer()}, {"gl_version", c.gl_version()}};
 }
-#endif
 
 RenderResourceFactory renderer_factory(const std::string& backend_name) {
-#ifdef HDRD_HAVE_RENDERER
   return [backend_name](int index) -> Result<std::unique_ptr<RenderResource>> {
     const auto backend = shading::parse_backend(backend_name);
     if (!backend) return make_error("config.invalid", "unknown renderer backend '" + backend_name + "'");
@@ -23,12 +20,6 @@ RenderResourceFactory renderer_factory(const std::string& backend_name) {
                  res->renderer->context().gl_renderer());
     return std::unique_ptr<RenderResource>(std::move(res));
   };
-#else
-  (void)backend_name;
-  return [](int) -> Result<std::unique_ptr<RenderResource>> {
-    return make_error("renderer.unavailable", "this build has no renderer (hdrd_shading)");
-  };
-#endif
 }
 
 }  // namespace hdrd::daemon

@@ -15,6 +15,7 @@
 #include "daemon/http_server.hpp"
 #include "daemon/metrics.hpp"
 #include "daemon/scheduler.hpp"
+#include "job/settings.hpp"
 
 namespace hdrd::daemon {
 
@@ -56,8 +57,10 @@ class Service final : public HttpHandler {
   void get_metrics(HttpRequest&, std::shared_ptr<Responder>);
   void post_render(HttpRequest&, std::shared_ptr<Responder>);
   void post_encode(HttpRequest&, std::shared_ptr<Responder>);
-  void post_pattern(HttpRequest&, std::shared_ptr<Responder>);   // api_patterns.cpp
-  void post_selftest(HttpRequest&, std::shared_ptr<Responder>);  // api_patterns.cpp
+  void post_pattern(HttpRequest&, std::shared_ptr<Responder>);
+  // The three as one: the frame job's transport (api_frame.cpp).
+  void post_frame(job::Source source, HttpRequest&, std::shared_ptr<Responder>);
+  void post_selftest(HttpRequest&, std::shared_ptr<Responder>);  // api_selftest.cpp
   // GET /v1/capabilities' "patterns": names, descriptions, sources, parameters, modes.
   static nlohmann::json pattern_capabilities();
   // Admits a job and connects its reply, cancellation and deadline to the responder.

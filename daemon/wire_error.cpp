@@ -1,20 +1,18 @@
 #include "daemon/wire_error.hpp"
 
-#include <string_view>
-
 #include <nlohmann/json.hpp>
-
-#include "daemon/text.hpp"
 
 namespace hdrd::daemon {
 namespace {
 
 struct StatusEntry {
-  std::string_view code;  // exact code, or "prefix." for a whole family
+  std::string_view code;  // exact code, or "family." for every code of a family
   unsigned status;
 };
 
-// Sorted by how specific the entry is: exact codes first, then families.
+// Exact codes first, then families. 4xx: the client's fault (400 the request itself, 422 a
+// well-formed request whose content — an uploaded EXR, a named EDID, a curve parameter —
+// cannot be used as given); 5xx: the daemon's (or a resource it lacks).
 constexpr StatusEntry kStatus[] = {
     {"request.too_large", 413},
     {"request.media_type", 415},
@@ -31,40 +29,62 @@ constexpr StatusEntry kStatus[] = {
     {"renderer.unavailable", 503},
     {"pipeline.unavailable", 503},
     {"display.unavailable", 503},
-    {"io.", 500},
+    {"gpu.unsupported", 500},
     {"internal", 500},
     {"request.", 400},
     {"path.", 400},
-    // Errors the encode pipeline and parsers report about what the request asked for or
-    // uploaded (bad EXR, unknown tone curve, parameter out of range): the request is
-    // well-formed but cannot be processed as given.
+    {"cli.", 400},
+    // What the request named or uploaded cannot be used as given.
     {"exr.", 422},
     {"png.", 422},
     {"cube.", 422},
+    {"strip.", 422},
     {"tone.", 422},
     {"tonemap.", 422},
     {"exposure.", 422},
     {"grade.", 422},
     {"display.", 422},
+    {"edid.", 422},
+    {"profile.", 422},
+    {"file.", 422},
     {"encode.", 422},
     {"pipeline.", 422},
     {"image.", 422},
+    {"ui.", 422},
     {"scene.", 422},
     {"gltf.", 422},
     {"camera.", 422},
     {"pattern.", 422},
+    {"selftest.", 422},
+    {"hdr_metadata.", 422},
+    {"scanout.", 422},
+    // The daemon's own faults and missing resources.
+    {"io.", 500},
+    {"dump.", 500},
+    {"frame.", 500},
     {"render.", 500},
+    {"gpu.", 500},
+    {"gpu_pass.", 500},
+    {"config.", 500},
+    {"server.", 500},
+    {"gl.", 503},
+    {"kms.", 503},
+    {"queue.", 503},
+    // The client's side of a connection (hdrctl, the tests): never sent by the daemon.
+    {"client.", 502},
 };
 
 }  // namespace
 
-unsigned http_status(const Error& e) {
+std::optional<unsigned> status_of(std::string_view code) {
   for (const auto& s : kStatus)
-    if (s.code.back() != '.' && e.code == s.code) return s.status;
+    if (s.code.back() != '.' && code == s.code) return s.status;
   for (const auto& s : kStatus)
-    if (s.code.back() == '.' && std::string_view(e.code).substr(0, s.code.size()) == s.code) return s.status;
-  return 500;
+    if (s.code.back() == '.' && code.substr(0, s.code.size()) == s.code) return s.status;
+  return std::nullopt;
 }
+
+unsigned http_status(const Error& e) { return status_of(e.code).value_or(500); }
 
 std::string error_body(const Error& e) {
   // One line whatever the message quotes (the request parser already ensures it; other

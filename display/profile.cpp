@@ -225,33 +225,20 @@ Result<Profile> profile_from_edid_file(const std::filesystem::path& path) {
   return profile_from_edid_info(*info);
 }
 
-void apply_profile(const Profile& p, DisplayTarget& t, bool set_mode) {
-  const bool was_sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
-  const bool whites_coupled = was_sdr && t.paper_white_nits == t.peak_nits;
-  if (set_mode && t.mode != p.mode) {
-    const DisplayTarget d = default_target(p.mode);
-    t.mode = p.mode;
-    t.bits = d.bits;
-    if (!was_sdr) {
-      t.paper_white_nits = d.paper_white_nits;
-      t.ui_white_nits = d.ui_white_nits;
-      t.sdr_white_nits = d.sdr_white_nits;
-    }
-  }
-  const bool now_sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
-  t.peak_nits = p.peak_nits;
-  t.black_nits = p.black_nits;
-  t.display_primaries = p.primaries;
-  t.source = p.source;
-  if (now_sdr && (whites_coupled || !was_sdr)) {
-    t.paper_white_nits = t.ui_white_nits = t.sdr_white_nits = p.peak_nits;
-  }
+LevelSettings profile_levels(const Profile& p) {
+  LevelSettings l;
+  l.peak_nits = p.peak_nits;
+  l.black_nits = p.black_nits;
+  l.display_primaries = p.primaries;
+  return l;
 }
 
 DisplayTarget target_for_profile(const Profile& p) {
-  DisplayTarget t = default_target(p.mode);
-  apply_profile(p, t, true);
-  return t;
+  auto t = resolve_target(p.mode, profile_levels(p), {}, p.source);
+  if (t) return *t;
+  // A profile is validated when it is made (validate_profile); keep the mode's defaults
+  // rather than fail if one slipped through.
+  return default_target(p.mode);
 }
 
 Result<void> validate_profile(const Profile& p) {

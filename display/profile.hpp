@@ -58,12 +58,12 @@ Result<Profile> profile_from_edid_file(const std::filesystem::path& path);
 Result<std::vector<std::uint8_t>> read_binary_file(const std::filesystem::path& path,
                                                    std::size_t max_bytes = 64 * 1024);
 
-// Sets the target's peak, black, display primaries and source from the profile; the mode
-// (and the bits that go with it) only when `set_mode`. SDR targets keep their whites
-// coupled to the peak when they were (REFERENCE.md §1.8: SDR paper white = peak).
-void apply_profile(const Profile& profile, DisplayTarget& target, bool set_mode = false);
+// What the profile says about the levels (peak, black, the display's primaries) for the
+// levels resolver (encode/display_target.hpp resolve_target), which adds the mode's
+// defaults, the request's values and the one coupling rule for the whites.
+LevelSettings profile_levels(const Profile& profile);
 
-// A DisplayTarget for the profile: default_target(profile.mode) with the profile applied.
+// The target for the profile alone: its mode and levels, everything else the mode's.
 DisplayTarget target_for_profile(const Profile& profile);
 
 Result<void> validate_profile(const Profile& profile);

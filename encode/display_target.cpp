@@ -1,32 +1,75 @@
 #include "encode/display_target.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
 
 namespace hdrd {
+namespace {
 
-std::string_view to_string(Mode m) {
-  switch (m) {
-    case Mode::hdr10: return "hdr10";
-    case Mode::hlg: return "hlg";
-    case Mode::scrgb: return "scrgb";
-    case Mode::sdr: return "sdr";
-    case Mode::sdr_bt1886: return "sdr-bt1886";
+constexpr int kTenBits[] = {10};
+constexpr int kSdrBits[] = {8, 10};
+constexpr int kHalfBits[] = {16};
+constexpr std::string_view kNoAliases[] = {""};
+constexpr std::string_view kSdrAliases[] = {"sdr-srgb"};
+constexpr std::string_view kBt1886Aliases[] = {"bt1886"};
+
+// REFERENCE.md §1.7 (encoding) and §1.8 (defaults).
+const ModeInfo kModes[] = {
+    {Mode::hdr10, "hdr10", std::span(kNoAliases, 0), "Rec.2020, PQ (SMPTE ST 2084), 10-bit, ST 2086 + CTA-861.3",
+     &color::kRec2020, Transfer::pq, 1000, 0.005, 203.0, kTenBits, true, true, true, true},
+    {Mode::hlg, "hlg", std::span(kNoAliases, 0), "Rec.2020, HLG (BT.2100), 10-bit", &color::kRec2020, Transfer::hlg,
+     1000, 0, 203.0, kTenBits, true, true, true, true},
+    {Mode::scrgb, "scrgb", std::span(kNoAliases, 0), "linear FP16, sRGB primaries, 1.0 = 80 cd/m2, negatives kept",
+     &color::kRec709, Transfer::linear, 1000, 0, 203.0, kHalfBits, true, false, false, false},
+    {Mode::sdr, "sdr", kSdrAliases, "Rec.709, sRGB piecewise curve (or gamma 2.2) on nits / peak", &color::kRec709,
+     Transfer::sdr_curve, 100, 0.1, std::nullopt, kSdrBits, false, false, true, true},
+    {Mode::sdr_bt1886, "sdr-bt1886", kBt1886Aliases, "Rec.709, inverse BT.1886 EOTF with Lw = peak, Lb = black",
+     &color::kRec709, Transfer::bt1886, 100, 0.1, std::nullopt, kSdrBits, false, false, true, true},
+};
+
+constexpr std::string_view kModeNames[] = {"hdr10", "hlg", "scrgb", "sdr", "sdr-bt1886"};
+
+}  // namespace
+
+bool ModeInfo::allows_bits(int b) const { return std::find(bits.begin(), bits.end(), b) != bits.end(); }
+
+std::uint32_t ModeInfo::drm_fourcc(int b) const {
+  if (transfer == Transfer::linear) return kDrmFormatAbgr16161616f;
+  return b == 8 ? kDrmFormatXrgb8888 : kDrmFormatXbgr2101010;
+}
+
+std::span<const ModeInfo> modes() { return kModes; }
+
+const ModeInfo& mode_info(Mode m) {
+  for (const auto& i : kModes)
+    if (i.mode == m) return i;
+  return kModes[0];
+}
+
+std::span<const std::string_view> mode_names() { return kModeNames; }
+
+std::string_view to_string(Mode m) { return mode_info(m).name; }
+
+std::optional<Mode> parse_mode(std::string_view s) {
+  for (const auto& i : kModes) {
+    if (i.name == s) return i.mode;
+    for (auto a : i.aliases)
+      if (a == s) return i.mode;
   }
-  return "?";
+  return std::nullopt;
+}
+
+std::string fourcc_name(std::uint32_t code) {
+  std::string s(4, ' ');
+  for (int i = 0; i < 4; ++i) s[static_cast<std::size_t>(i)] = static_cast<char>((code >> (8 * i)) & 0xFF);
+  return s;
 }
 
 std::string_view to_string(Range r) { return r == Range::full ? "full" : "narrow"; }
 std::string_view to_string(SdrCurve c) { return c == SdrCurve::srgb ? "srgb" : "gamma22"; }
-
-std::optional<Mode> parse_mode(std::string_view s) {
-  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::scrgb, Mode::sdr, Mode::sdr_bt1886})
-    if (to_string(m) == s) return m;
-  if (s == "sdr-srgb") return Mode::sdr;
-  if (s == "bt1886") return Mode::sdr_bt1886;
-  return std::nullopt;
-}
 
 std::optional<Range> parse_range(std::string_view s) {
   if (s == "full") return Range::full;
@@ -40,10 +83,6 @@ std::optional<SdrCurve> parse_sdr_curve(std::string_view s) {
   return std::nullopt;
 }
 
-const color::Primaries& DisplayTarget::container() const {
-  return (mode == Mode::hdr10 || mode == Mode::hlg) ? color::kRec2020 : color::kRec709;
-}
-
 MasteringDisplay DisplayTarget::mastering() const {
   MasteringDisplay md;
   if (display_primaries) md.primaries = *display_primaries;
@@ -52,27 +91,44 @@ MasteringDisplay DisplayTarget::mastering() const {
   return md;
 }
 
-DisplayTarget default_target(Mode m) {
-  DisplayTarget t;
-  t.mode = m;
-  switch (m) {
-    case Mode::hdr10:
-      t.peak_nits = 1000; t.black_nits = 0.005; t.paper_white_nits = 203; t.bits = 10;
-      break;
-    case Mode::hlg:
-      t.peak_nits = 1000; t.black_nits = 0; t.paper_white_nits = 203; t.bits = 10;
-      break;
-    case Mode::scrgb:
-      t.peak_nits = 1000; t.black_nits = 0; t.paper_white_nits = 203; t.bits = 16;
-      break;
-    case Mode::sdr:
-    case Mode::sdr_bt1886:
-      t.peak_nits = 100; t.black_nits = 0.1; t.paper_white_nits = 100; t.bits = 8;
-      break;
+H273 h273(const DisplayTarget& t) {
+  H273 c;
+  c.full_range = t.range == Range::full;
+  switch (t.info().transfer) {
+    case Transfer::pq: c.primaries = 9, c.transfer = 16; break;
+    case Transfer::hlg: c.primaries = 9, c.transfer = 18; break;
+    case Transfer::sdr_curve: c.transfer = t.sdr_curve == SdrCurve::srgb ? 13 : 4; break;
+    case Transfer::bt1886: c.transfer = 1; break;
+    case Transfer::linear: c.transfer = 8; break;  // linear; scRGB has no PNG form
   }
-  t.ui_white_nits = t.paper_white_nits;
-  t.sdr_white_nits = t.paper_white_nits;
+  return c;
+}
+
+Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, const LevelSettings& request,
+                                     std::string_view display_source) {
+  const ModeInfo& info = mode_info(mode);
+  DisplayTarget t;
+  t.mode = mode;
+  auto pick = [](const auto& req, const auto& disp, auto fallback) { return req ? *req : disp ? *disp : fallback; };
+  t.peak_nits = pick(request.peak_nits, display.peak_nits, info.peak_nits);
+  t.black_nits = pick(request.black_nits, display.black_nits, info.black_nits);
+  // The coupling rule (REFERENCE.md §1.4, §1.8), in this one place.
+  t.paper_white_nits = pick(request.paper_white_nits, display.paper_white_nits, info.paper_white_nits.value_or(t.peak_nits));
+  t.ui_white_nits = pick(request.ui_white_nits, display.ui_white_nits, t.paper_white_nits);
+  t.sdr_white_nits = pick(request.sdr_white_nits, display.sdr_white_nits, t.paper_white_nits);
+  t.range = pick(request.range, display.range, Range::full);
+  t.sdr_curve = pick(request.sdr_curve, display.sdr_curve, SdrCurve::srgb);
+  t.bits = pick(request.bits, display.bits, info.default_bits());
+  t.display_primaries = request.display_primaries ? request.display_primaries : display.display_primaries;
+  t.source = display_source.empty() ? "defaults" : std::string(display_source);
+  if (request.any_level()) t.source += "+request";
+  if (auto ok = validate(t); !ok) return ok.error();
   return t;
+}
+
+DisplayTarget default_target(Mode m) {
+  auto t = resolve_target(m, {}, {});
+  return *t;  // the table's defaults are valid (tests/encode/display_target_test.cpp)
 }
 
 Result<void> validate(const DisplayTarget& t) {
@@ -92,13 +148,14 @@ Result<void> validate(const DisplayTarget& t) {
     return bad("display.ui_white_nits", fmt::format("UI white {} cd/m2 is not in (0, 10000]", t.ui_white_nits));
   if (!finite_pos(t.sdr_white_nits) || t.sdr_white_nits > 10000)
     return bad("display.sdr_white_nits", fmt::format("SDR white {} cd/m2 is not in (0, 10000]", t.sdr_white_nits));
-  const bool sdr = t.mode == Mode::sdr || t.mode == Mode::sdr_bt1886;
-  if (sdr && t.bits != 8 && t.bits != 10)
-    return bad("display.bits", fmt::format("SDR output is 8 or 10 bits, not {}", t.bits));
-  if ((t.mode == Mode::hdr10 || t.mode == Mode::hlg) && t.bits != 10)
-    return bad("display.bits", fmt::format("{} output is 10 bits, not {}", to_string(t.mode), t.bits));
-  if (t.mode == Mode::scrgb && t.range == Range::narrow)
-    return bad("display.range", "scRGB is a float format and has no narrow range");
+  const ModeInfo& info = t.info();
+  if (!info.allows_bits(t.bits)) {
+    std::string allowed;
+    for (int b : info.bits) allowed += (allowed.empty() ? "" : " or ") + std::to_string(b);
+    return bad("display.bits", fmt::format("{} output is {} bits, not {}", info.name, allowed, t.bits));
+  }
+  if (t.range == Range::narrow && !info.narrow_range)
+    return bad("display.range", fmt::format("{} is a float format and has no narrow range", info.name));
   return {};
 }
 

@@ -20,14 +20,6 @@ struct ContentLightLevel {
   double max_fall_nits = 0;  // largest frame average of per-pixel max(R,G,B)
 };
 
-// DRM fourcc codes (drm_fourcc.h), repeated here so encode/ needs no libdrm.
-inline constexpr std::uint32_t fourcc(char a, char b, char c, char d) {
-  return std::uint32_t(a) | (std::uint32_t(b) << 8) | (std::uint32_t(c) << 16) | (std::uint32_t(d) << 24);
-}
-inline constexpr std::uint32_t kDrmFormatXbgr2101010 = fourcc('X', 'B', '3', '0');
-inline constexpr std::uint32_t kDrmFormatAbgr16161616f = fourcc('A', 'B', '4', 'H');
-inline constexpr std::uint32_t kDrmFormatXrgb8888 = fourcc('X', 'R', '2', '4');
-std::string fourcc_name(std::uint32_t code);  // "XB30", ...
 
 struct EncodedFrame {
   DisplayTarget target;

@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <variant>
 
@@ -70,6 +71,16 @@ class [[nodiscard]] Result<void> {
 
 inline Error make_error(std::string code, std::string message, std::string field = {}) {
   return Error{std::move(code), std::move(message), std::move(field)};
+}
+
+// An error message is one human line, even when it quotes what a user sent (a JSON key may
+// hold "\n", a path or query parameter %0A): `s` with every C0 control and DEL replaced by
+// a space.
+inline std::string one_line(std::string_view s) {
+  std::string out(s);
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  return out;
 }
 
 }  // namespace hdrd

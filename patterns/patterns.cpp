@@ -249,7 +249,7 @@ Result<EncodedFrame> make_pattern(std::string_view name, const DisplayTarget& ta
   if (!info)
     return make_error("pattern.unknown", fmt::format("unknown pattern '{}' (see hdrd pattern --list)", name), "pattern");
   nlohmann::json desc = {{"name", info->name}, {"source", info->source}, {"width", o.width}, {"height", o.height}};
-  Result<EncodedFrame> frame = make_error("pattern", "not built");
+  Result<EncodedFrame> frame = make_error("internal", "pattern not built");
   if (name == "bt2111") {
     if (target.mode != Mode::hdr10 && target.mode != Mode::hlg)
       return make_error("pattern.mode", "bt2111 bars exist for PQ (--mode hdr10) and HLG (--mode hlg) only", "mode");

@@ -29,9 +29,9 @@ if [ -f "$shared/fixtures/exr/Desk.exr" ]; then
   # how the curves differ and the room stays readable.
   "$hdrd" contact-sheet "$shared/fixtures/exr/Desk.exr" -o "$img/contact-sheet-desk.png" --tile-width 130 \
     --columns 5 --exposure -2 -q
-  # What `hdrd encode Desk.exr --debug heatmap` writes next to its dumps, at half size.
-  "$hdrd" plot heatmap "$shared/fixtures/exr/Desk.exr" --mode hdr10 --peak 1000 --max-width 330 \
-    -o "$img/heatmap-desk.png" -q
+  # The heatmap output of an HDR10 encode (`--format heatmap`).
+  "$hdrd" encode "$shared/fixtures/exr/Desk.exr" --mode hdr10 --peak 1000 --format heatmap -o "$tmp/desk" -q
+  cp "$tmp/desk.heatmap.png" "$img/heatmap-desk.png"
 else
   echo "make-docs-pictures: $shared/fixtures/exr/Desk.exr missing: contact sheet and heatmap skipped" >&2
 fi

@@ -158,23 +158,23 @@ class HdrdClient:
         self._raise_for(status, data)
         return data.decode()
 
-    def render(self, request, accept="image/png"):
-        """POST /v1/render. `request` is the JSON body (a dict); `accept` picks
-        image/png, image/x-exr or application/octet-stream (raw DRM buffer)."""
+    def _answer(self, path, body, content_type, dump, accept):
         status, headers, data = self.request(
-            "POST", "/v1/render", json.dumps(request),
-            {"Content-Type": "application/json", "Accept": accept})
+            "POST", path, body, {"Content-Type": content_type, "Accept": "application/json" if dump else accept})
         self._raise_for(status, data)
-        return self._frame(headers, data)
+        return json.loads(data) if dump else self._frame(headers, data)
+
+    def render(self, request, accept="image/png"):
+        """POST /v1/render. `request` is the JSON body (a dict: the settings of
+        docs/settings.md, e.g. {"width": 256, "display": {"mode": "hdr10"}}); `accept` picks
+        image/png, image/x-exr or application/octet-stream (raw DRM buffer). With
+        "dump": true the daemon writes the files into its dump directory and this returns
+        the sidecar (paths under "files")."""
+        return self._answer("/v1/render", json.dumps(request), "application/json", request.get("dump"), accept)
 
     def render_dump(self, request):
-        """POST /v1/render with "dump": true: the daemon writes the files into its dump
-        directory; returns the sidecar (paths under "files")."""
-        body = dict(request, dump=True)
-        status, _, data = self.request("POST", "/v1/render", json.dumps(body),
-                                       {"Content-Type": "application/json", "Accept": "application/json"})
-        self._raise_for(status, data)
-        return json.loads(data)
+        """POST /v1/render with "dump": true: returns the sidecar."""
+        return self.render(dict(request, dump=True))
 
     def pattern(self, name, params=None, display=None, accept="image/png", **fields):
         """POST /v1/pattern: a standard test pattern (bt2111, pq-ramp, window, near-black,
@@ -187,11 +187,7 @@ class HdrdClient:
             body["params"] = params
         if display is not None:
             body["display"] = display
-        status, headers, data = self.request(
-            "POST", "/v1/pattern", json.dumps(body),
-            {"Content-Type": "application/json", "Accept": "application/json" if body.get("dump") else accept})
-        self._raise_for(status, data)
-        return json.loads(data) if body.get("dump") else self._frame(headers, data)
+        return self._answer("/v1/pattern", json.dumps(body), "application/json", body.get("dump"), accept)
 
     def selftest(self, mode="hdr10", peak_nits=None, render=True):
         """POST /v1/selftest: the display-mode suite for one mode. Returns the report (a dict);
@@ -205,19 +201,17 @@ class HdrdClient:
         return json.loads(data)
 
     def encode(self, exr_bytes, options=None, accept="image/png"):
-        """POST /v1/encode: an OpenEXR file's bytes plus the same display/tone/exposure
-        options as render (sent as multipart/form-data: parts "image" and "request")."""
+        """POST /v1/encode: an OpenEXR file's bytes plus the same settings as render (sent as
+        multipart/form-data: parts "image" and "request"). With "dump": true in `options`,
+        returns the sidecar."""
+        options = options or {}
         boundary = "hdrd-" + uuid.uuid4().hex
         parts = [
             (b'Content-Disposition: form-data; name="image"; filename="input.exr"\r\n'
              b"Content-Type: image/x-exr\r\n\r\n", exr_bytes),
             (b'Content-Disposition: form-data; name="request"\r\n'
-             b"Content-Type: application/json\r\n\r\n", json.dumps(options or {}).encode()),
+             b"Content-Type: application/json\r\n\r\n", json.dumps(options).encode()),
         ]
         body = b"".join(b"--" + boundary.encode() + b"\r\n" + head + data + b"\r\n" for head, data in parts)
         body += b"--" + boundary.encode() + b"--\r\n"
-        status, headers, data = self.request(
-            "POST", "/v1/encode", body,
-            {"Content-Type": "multipart/form-data; boundary=" + boundary, "Accept": accept})
-        self._raise_for(status, data)
-        return self._frame(headers, data)
+        return self._answer("/v1/encode", body, "multipart/form-data; boundary=" + boundary, options.get("dump"), accept)

@@ -153,6 +153,16 @@ Result<void> commit_all(std::vector<TempFile>& files) {
 
 }  // namespace
 
+Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files) {
+  std::vector<TempFile> temps;
+  for (const auto& f : files) {
+    auto t = TempFile::write(f.path, f.bytes);
+    if (!t) return t.error();
+    temps.push_back(std::move(t.value()));
+  }
+  return commit_all(temps);
+}
+
 Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes) {
   auto temp = TempFile::write(path, bytes);
   if (!temp) return temp.error();
@@ -283,10 +293,9 @@ std::map<std::string, std::string> exr_attributes(const EncodedFrame& frame) {
   return a;
 }
 
-// EXR dump of an encoded frame: display light in the container primaries, scaled so that
-// value x whiteLuminance = cd/m2 (scRGB: nits / 80, whiteLuminance 80; otherwise
-// nits / paper white, whiteLuminance = paper white).
-Result<std::vector<std::uint8_t>> dump_exr_bytes(const EncodedFrame& frame) {
+}  // namespace
+
+Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame) {
   if (!frame.display_nits)
     return make_error("dump.exr", "the EXR dump needs the frame's display light (display_nits), which the encoder did not keep",
                       "format");
@@ -309,6 +318,8 @@ Result<std::vector<std::uint8_t>> dump_exr_bytes(const EncodedFrame& frame) {
   return encode_exr(scaled, options);
 }
 
+namespace {
+
 fs::path with_extension(const fs::path& outbase, std::string_view ext) {
   fs::path p = outbase;
   p += ".";
@@ -319,7 +330,7 @@ fs::path with_extension(const fs::path& outbase, std::string_view ext) {
 Result<std::vector<std::uint8_t>> dump_bytes(const EncodedFrame& frame, DumpFormat f) {
   switch (f) {
     case DumpFormat::png: return encode_png(frame);
-    case DumpFormat::exr: return dump_exr_bytes(frame);
+    case DumpFormat::exr: return encode_display_exr(frame);
     case DumpFormat::raw: return frame.data;
   }
   return make_error("dump.format", "unknown dump format");
@@ -364,21 +375,11 @@ Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbas
   const fs::path sidecar_path = with_extension(outbase, "json");
   const std::string sidecar = sidecar_json(frame, names).dump(2) + "\n";
 
-  std::vector<TempFile> temps;
-  for (const auto& [f, bytes] : encoded) {
-    auto t = TempFile::write(with_extension(outbase, extension(f)), bytes);
-    if (!t) return t.error();
-    temps.push_back(std::move(t.value()));
-  }
-  for (const auto& x : extra) {
-    auto t = TempFile::write(outbase.string() + x.suffix, x.bytes);
-    if (!t) return t.error();
-    temps.push_back(std::move(t.value()));
-  }
-  auto t = TempFile::write(sidecar_path, std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size()));
-  if (!t) return t.error();
-  temps.push_back(std::move(t.value()));
-  if (auto ok = commit_all(temps); !ok) return ok.error();
+  std::vector<FileToWrite> files;
+  for (const auto& [f, bytes] : encoded) files.push_back({with_extension(outbase, extension(f)), bytes});
+  for (const auto& x : extra) files.push_back({outbase.string() + x.suffix, x.bytes});
+  files.push_back({sidecar_path, std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size())});
+  if (auto ok = write_all_or_nothing(files); !ok) return ok.error();
   result.files["sidecar"] = sidecar_path.string();
   return result;
 }

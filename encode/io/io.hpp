@@ -86,6 +86,19 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
 // Writes bytes to `path` atomically.
 Result<void> atomic_write(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
 
+// Writes a set of files together: each under a temporary name first, then all renamed;
+// on any failure none is left behind (renamed ones are removed again).
+struct FileToWrite {
+  std::filesystem::path path;
+  std::span<const std::uint8_t> bytes;
+};
+Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files);
+
+// The EXR form of an encoded frame (needs frame.display_nits): display light in the
+// container primaries, half float, scaled so that value x whiteLuminance = cd/m2 (scRGB:
+// nits / 80, whiteLuminance 80; otherwise nits / paper white, whiteLuminance = paper white).
+Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame);
+
 enum class DumpFormat { png, exr, raw };
 std::optional<DumpFormat> parse_dump_format(std::string_view s);
 // The formats that apply to a mode by default: all but png for scrgb.

@@ -175,42 +175,45 @@ Profile hdr_profile() {
   return p;
 }
 
-TEST(ApplyProfile, SetsLevelsPrimariesAndSourceButNotTheModeUnlessAsked) {
-  DisplayTarget t = default_target(Mode::hlg);
-  apply_profile(hdr_profile(), t);
-  EXPECT_EQ(t.mode, Mode::hlg);
-  EXPECT_EQ(t.peak_nits, 600);
-  EXPECT_EQ(t.black_nits, 0.05);
-  ASSERT_TRUE(t.display_primaries);
-  EXPECT_EQ(*t.display_primaries, color::kDisplayP3);
-  EXPECT_EQ(t.source, "edid:Panel");
-  EXPECT_EQ(t.paper_white_nits, 203);
-  apply_profile(hdr_profile(), t, /*set_mode=*/true);
-  EXPECT_EQ(t.mode, Mode::hdr10);
-  EXPECT_TRUE(validate(t).ok());
+TEST(ProfileLevels, SetLevelsPrimariesAndSourceOfAnyMode) {
+  // The resolver keeps the mode asked for and takes the display's levels.
+  auto t = resolve_target(Mode::hlg, profile_levels(hdr_profile()), {}, "edid:Panel");
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  EXPECT_EQ(t->mode, Mode::hlg);
+  EXPECT_EQ(t->peak_nits, 600);
+  EXPECT_EQ(t->black_nits, 0.05);
+  ASSERT_TRUE(t->display_primaries);
+  EXPECT_EQ(*t->display_primaries, color::kDisplayP3);
+  EXPECT_EQ(t->source, "edid:Panel");
+  EXPECT_EQ(t->paper_white_nits, 203);
+  const DisplayTarget u = target_for_profile(hdr_profile());
+  EXPECT_EQ(u.mode, Mode::hdr10);
+  EXPECT_TRUE(validate(u).ok());
   // The mastering metadata the encoder writes follows the profile.
-  EXPECT_EQ(t.mastering().max_nits, 600);
-  EXPECT_EQ(t.mastering().primaries, color::kDisplayP3);
+  EXPECT_EQ(u.mastering().max_nits, 600);
+  EXPECT_EQ(u.mastering().primaries, color::kDisplayP3);
 }
 
-TEST(ApplyProfile, SdrTargetsKeepPaperWhiteAtThePeak) {
+TEST(ProfileLevels, SdrTargetsKeepPaperWhiteAtThePeak) {
   Profile p = hdr_profile();
   p.mode = Mode::sdr;
   p.peak_nits = 300;
   p.black_nits = 0.3;
-  DisplayTarget t = default_target(Mode::hdr10);
-  apply_profile(p, t, true);
+  const DisplayTarget t = target_for_profile(p);
   EXPECT_EQ(t.mode, Mode::sdr);
   EXPECT_EQ(t.bits, 8);
   EXPECT_EQ(t.peak_nits, 300);
   EXPECT_EQ(t.paper_white_nits, 300);
   EXPECT_EQ(t.ui_white_nits, 300);
   EXPECT_TRUE(validate(t).ok());
-  // A user's own SDR paper white is left alone.
-  DisplayTarget u = default_target(Mode::sdr);
-  u.paper_white_nits = 80;
-  apply_profile(p, u);
-  EXPECT_EQ(u.paper_white_nits, 80);
+  // A user's own SDR paper white is left alone, and the source says the request set it.
+  LevelSettings req;
+  req.paper_white_nits = 80;
+  auto u = resolve_target(Mode::sdr, profile_levels(p), req, p.source);
+  ASSERT_TRUE(u.ok());
+  EXPECT_EQ(u->paper_white_nits, 80);
+  EXPECT_EQ(u->ui_white_nits, 80);
+  EXPECT_EQ(u->source, "edid:Panel+request");
 }
 
 TEST(ProfileOverride, TomlExampleFromConfigMatchesAndApplies) {

@@ -26,7 +26,7 @@ TEST(RenderCli, WritesDumpsAndTheSceneReferredExr) {
   TempDir dir;
   const auto base = dir / "furnace";
   const auto r = run_command(hdrd_binary().string() + " render --scene furnace -o " + base.string() +
-                             " --width 64 --height 36 --samples 1 --mode hdr10 --format png,raw --json");
+                             " --width 64 --height 36 --samples 1 --mode hdr10 --format png,raw,scene-exr --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["mode"], "hdr10");
@@ -37,9 +37,10 @@ TEST(RenderCli, WritesDumpsAndTheSceneReferredExr) {
     EXPECT_TRUE(std::filesystem::exists(base.string() + ext)) << ext;
   EXPECT_NE(r.err.find("rendered furnace"), std::string::npos) << "progress on stderr: " << r.err;
   // The sidecar lists every file of the dump, the scene-referred EXR included.
+  EXPECT_EQ(j["files"]["scene-exr"], base.string() + ".scene.exr");
   std::ifstream sidecar(base.string() + ".json");
   const auto side = nlohmann::json::parse(sidecar);
-  EXPECT_EQ(side["files"]["scene_exr"], "furnace.scene.exr");
+  EXPECT_EQ(side["files"]["scene-exr"], "furnace.scene.exr");
   EXPECT_EQ(side["files"]["png"], "furnace.png");
   EXPECT_EQ(side["files"]["raw"], "furnace.raw");
   // The scene EXR: float, absolute cd/m2 (whiteLuminance 1); the furnace is 1000 cd/m2.

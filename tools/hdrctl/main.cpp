@@ -37,18 +37,15 @@ struct Global {
   bool quiet = false;
 };
 
-struct RenderOptions {
-  FrameOptions frame;
-  std::optional<std::string> scene, scene_file, gltf;
-  std::optional<int> width, height, samples;
-  std::vector<double> camera_position, camera_target;
-  std::optional<double> fov;
-};
-
 struct EncodeOptions {
   FrameOptions frame;
   std::string input;
-  std::optional<std::string> input_units;
+};
+
+struct PatternOptions {
+  FrameOptions frame;
+  std::string name;
+  bool list = false;
 };
 
 struct SelftestOptions {
@@ -172,27 +169,15 @@ void finish_frame(const Global& g, const OutputOptions& o, const ClientResponse&
   else if (!g.quiet) std::fprintf(stderr, "hdrctl: %s\n", summary_line(meta, to_stdout ? "stdout" : o.output).c_str());
 }
 
-void run_render(const Global& g, const RenderOptions& o) {
-  json extra = json::object();
-  if (o.scene) extra["scene"] = *o.scene;
-  if (o.scene_file) extra["scene_file"] = *o.scene_file;
-  if (o.gltf) extra["gltf"] = *o.gltf;
-  if (o.width) extra["width"] = *o.width;
-  if (o.height) extra["height"] = *o.height;
-  if (o.samples) extra["samples"] = *o.samples;
-  if (o.camera_position.size() == 3) extra["camera"]["position"] = o.camera_position;
-  if (o.camera_target.size() == 3) extra["camera"]["target"] = o.camera_target;
-  if (o.fov) extra["camera"]["fov_y_deg"] = *o.fov;
-  const json b = frame_body(o.frame, extra);
+void run_render(const Global& g, const FrameOptions& o) {
+  const json b = frame_body(o);
   const auto r = call(g, "POST", "/v1/render", b.dump(),
-                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.frame.out)}});
-  finish_frame(g, o.frame.out, r);
+                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.out)}});
+  finish_frame(g, o.out, r);
 }
 
 void run_encode(const Global& g, const EncodeOptions& o) {
-  json extra = json::object();
-  if (o.input_units) extra["input"] = *o.input_units;
-  const json b = frame_body(o.frame, extra);
+  const json b = frame_body(o.frame);
   std::string content_type;
   const std::string body = hdrd::daemon::multipart_body(
       {{"image", fs::path(o.input).filename().string(), "image/x-exr", read_all(o.input)},
@@ -224,10 +209,10 @@ void print_pattern_list(const Global& g) {
 void run_pattern(const Global& g, const PatternOptions& o) {
   if (o.list) return print_pattern_list(g);
   if (o.name.empty()) throw Failure{2, "a pattern name is required (hdrctl pattern --list shows them)"};
-  const json b = pattern_body(o);
+  const json b = frame_body(o.frame, {{"pattern", o.name}});
   const auto r = call(g, "POST", "/v1/pattern", b.dump(),
-                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.out)}});
-  finish_frame(g, o.out, r);
+                      {{"Content-Type", "application/json"}, {"Accept", accept_for(o.frame.out)}});
+  finish_frame(g, o.frame.out, r);
 }
 
 std::string selftest_text(const json& report, bool failed_only) {
@@ -366,42 +351,31 @@ int main(int argc, char** argv) {
       "Every subcommand has --help with its own examples. Exit status: 0 ok, 1 an error answer (or a failed\n"
       "selftest), 2 a usage error, 3 the daemon cannot be reached.");
 
-  RenderOptions ro;
+  FrameOptions ro;
   auto* render = app.add_subcommand("render", "POST /v1/render: render a scene and fetch the encoded frame");
-  add_output_options(render, ro.frame.out);
-  add_display_options(render, ro.frame.display);
-  add_pipeline_options(render, ro.frame.pipeline);
-  render->add_option("--scene", ro.scene, "Built-in scene name");
-  render->add_option("--scene-file", ro.scene_file, "JSON scene in the daemon's asset root");
-  render->add_option("--gltf", ro.gltf, "glTF file in the daemon's asset root");
-  render->add_option("--width", ro.width, "Frame width");
-  render->add_option("--height", ro.height, "Frame height");
-  render->add_option("--samples", ro.samples, "MSAA samples");
-  render->add_option("--camera-position", ro.camera_position, "Camera position X Y Z")->expected(3);
-  render->add_option("--camera-target", ro.camera_target, "Camera target X Y Z")->expected(3);
-  render->add_option("--fov", ro.fov, "Vertical field of view, degrees");
+  add_frame_options(render, hdrd::job::Source::render, ro);
   render->footer(examples({"hdrctl render --width 256 --height 144 --mode hdr10 --peak 1000 -o frame.png",
                            "hdrctl render --mode scrgb -o frame.exr                  (format from the extension)",
+                           "hdrctl render --scene model.gltf --camera 0,1.5,4:0,0.5,0:40 -o m.png   (files: the asset root)",
                            "hdrctl render --request req.json --set display.mode=sdr -o frame.png",
                            "hdrctl render --mode sdr --dump --name grid             (prints the sidecar)",
-                           "hdrctl render --width 64 --height 36 -o f.png --json    (metadata as JSON)"}));
+                           "hdrctl render --width 64 --height 36 -o f.png --json    (metadata as JSON)",
+                           "The request options are hdrd render's (docs/settings.md), with the same defaults."}));
 
   EncodeOptions eo;
   auto* encode = app.add_subcommand("encode", "POST /v1/encode: encode a local OpenEXR through the daemon");
   encode->add_option("file", eo.input, "OpenEXR file")->required();
-  add_output_options(encode, eo.frame.out);
-  add_display_options(encode, eo.frame.display);
-  add_pipeline_options(encode, eo.frame.pipeline);
-  encode->add_option("--input", eo.input_units, "relative or absolute (default: from the file's whiteLuminance)");
+  add_frame_options(encode, hdrd::job::Source::encode, eo.frame);
   encode->footer(examples({"hdrctl encode Desk.exr --mode hdr10 --peak 600 -o desk.png",
                            "hdrctl encode Desk.exr --mode scrgb --tonemap bt2390 -o desk.exr",
-                           "hdrctl encode Desk.exr --mode sdr --dump --dump-formats png,raw --name desk"}));
+                           "hdrctl encode Desk.exr --mode sdr --dump --format png,raw --name desk",
+                           "The request options are hdrd encode's (docs/settings.md), with the same defaults."}));
 
   PatternOptions po;
   auto* pattern = app.add_subcommand("pattern", "POST /v1/pattern: a standard HDR test pattern for a display mode");
-  add_pattern_options(pattern, po);
-  add_output_options(pattern, po.out);
-  add_display_options(pattern, po.display);
+  pattern->add_option("name", po.name, "bt2111, pq-ramp, window, near-black, clipping, sdr-grey (--list)");
+  pattern->add_flag("--list", po.list, "List the patterns and their parameters (from the daemon)");
+  add_frame_options(pattern, hdrd::job::Source::pattern, po.frame);
   pattern->footer(examples({"hdrctl pattern --list",
                             "hdrctl pattern bt2111 --mode hdr10 -o bars-pq.png       (ITU-R BT.2111-2, narrow range)",
                             "hdrctl pattern window --mode hdr10 --peak 1000 --level 1000 --area 10 -o win.png",

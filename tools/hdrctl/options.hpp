@@ -1,7 +1,7 @@
-// hdrctl's command-line options and the JSON request bodies they make (docs/api.md,
-// "Request fields"). Option groups follow the API: the display target, the scene-referred
-// pipeline (render, encode), the answer (file, format, dump), and the patterns'
-// parameters.
+// hdrctl's request options and the JSON bodies they make. The request settings are the
+// settings table's (job/settings.hpp), exactly as `hdrd render/encode/pattern` offers them
+// (tools/common/settings_cli.hpp); hdrctl adds only its transport: a request file to start
+// from, --set overrides, where the answer goes and in what format, dumps.
 #pragma once
 
 #include <optional>
@@ -11,6 +11,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "job/settings.hpp"
+#include "tools/common/settings_cli.hpp"
+
 namespace hdrctl {
 
 struct Failure {  // one line on stderr, then this exit status
@@ -18,58 +21,30 @@ struct Failure {  // one line on stderr, then this exit status
   std::string message;
 };
 
-// display.*
-struct DisplayOptions {
-  std::optional<std::string> mode, range, sdr_curve, display;
-  std::optional<double> peak, black, paper_white, ui_white, sdr_white;
-  std::optional<int> bits;
-};
-
-// Tone curve, exposure, gamut, grading and UI overlay: render and encode only.
-struct PipelineOptions {
-  std::optional<std::string> tonemap, tonemap_apply, exposure_mode, gamut, lut, lut_shaper, grade_placement, ui,
-      ui_upload;
-  std::optional<double> exposure_ev, ev100, ui_scale, ui_dim;
-  std::vector<std::string> tonemap_params;
-  std::vector<int> ui_pos;
-};
-
 // Where the answer goes, and the request file / --set overrides every body starts from.
 struct OutputOptions {
   std::string request_file;
   std::vector<std::string> sets;
-  std::string output, format;
+  std::string output;
+  std::string format;  // without --dump: the reply's format (png, exr, raw); with --dump: the dump's formats
   bool dump = false;
-  std::string dump_formats;
   std::optional<std::string> name;
 };
 
 struct FrameOptions {
-  DisplayOptions display;
-  PipelineOptions pipeline;
+  hdrd::cli::SettingArgs settings;
   OutputOptions out;
-};
-
-struct PatternOptions {
-  DisplayOptions display;
-  OutputOptions out;
-  std::string name;
-  bool list = false;
-  std::optional<int> width, height, steps;
-  std::optional<double> level, area;
-  bool no_labels = false;
+  std::string ui_upload;  // a local PNG sent in the request (ui.png_base64)
 };
 
 std::string read_all(const std::string& path);  // "-": stdin
 
-void add_display_options(CLI::App* app, DisplayOptions& o);
-void add_pipeline_options(CLI::App* app, PipelineOptions& o);
-void add_output_options(CLI::App* app, OutputOptions& o);
-void add_pattern_options(CLI::App* app, PatternOptions& o);
+// The settings of `source` as options, and hdrctl's transport options.
+void add_frame_options(CLI::App* app, hdrd::job::Source source, FrameOptions& o);
 
-// Request bodies: the --request file, then the options, then every --set.
+// The request body: the --request file, then the setting options, then `extra` (a pattern's
+// name), then every --set.
 nlohmann::json frame_body(const FrameOptions& o, const nlohmann::json& extra = nlohmann::json::object());
-nlohmann::json pattern_body(const PatternOptions& o);
 
 // The Accept header for the answer: JSON for a dump, else from --format or -o's extension.
 std::string accept_for(const OutputOptions& o);

@@ -5,16 +5,17 @@
 #include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tone/tonemap.hpp"
+#include "job/build.hpp"
 #include "patterns/plot.hpp"
+#include "tools/common/settings_cli.hpp"
 #include "tools/hdrd/command.hpp"
-#include "tools/hdrd/pipeline_options.hpp"
 
 namespace hdrd::cli {
 namespace {
 
 struct SheetOptions {
   CommonOptions common;
-  PipelineOptions pipeline;
+  SettingArgs args;
   std::string input, output;
   int tile_width = 320;
   int columns = 4;
@@ -22,14 +23,28 @@ struct SheetOptions {
 
 void run(const SheetOptions& o) {
   set_progress_enabled(!o.common.quiet);
+  // An encode request spelt with the usual flags, whose settings apply to every tile.
+  auto doc = request_json(o.args);
+  if (!doc) throw HdrdError(doc.error());
+  if (!doc->contains("display") || !(*doc)["display"].contains("mode")) (*doc)["display"]["mode"] = "sdr";  // an SDR preview
+  job::ParseContext ctx;
+  ctx.source = job::Source::encode;
+  ctx.spelling = job::Spelling::cli;
+  ctx.reach = job::Reach::cli;
+  ctx.resolve_path = [](std::string_view p, const std::string&) -> Result<std::filesystem::path> { return std::filesystem::path(p); };
+  auto request = job::parse_request_json(*doc, ctx);
+  if (!request) throw HdrdError(request.error());
   std::vector<std::string> notes;
-  PipelineOptions po = o.pipeline;
-  if (po.mode.empty() || po.mode == "hdr10") po.mode = "sdr";  // the default here is an SDR preview
-  EncodeSettings base = build_settings(po, exposure::Mode::manual, &notes);
-  if (base.target.mode != Mode::sdr && base.target.mode != Mode::sdr_bt1886)
+  auto target = job::resolve_display(*request, &notes);
+  if (!target) throw HdrdError(target.error());
+  if (!target->is_sdr())
     throw CliError("contact sheets are SDR previews: use --mode sdr or sdr-bt1886 (--peak sets the tone curves' display)");
-  base.target.bits = 8;
-  if (!o.pipeline.tonemap.empty()) notes.push_back("--tonemap is ignored: the sheet shows every curve");
+  target->bits = 8;
+  auto settings = job::encode_settings(*request, *target, static_cast<int>(request->integer("threads")), &notes);
+  if (!settings) throw HdrdError(settings.error());
+  settings->exposure.mode = job::exposure_mode(*request, request->has("exposure.illuminance_lux"));
+  const EncodeSettings base = *settings;
+  if (request->has("tone.curve")) notes.push_back("--tonemap is ignored: the sheet shows every curve");
   auto exr = io::read_exr(o.input);
   if (!exr) throw HdrdError(exr.error());
   const Image small = patterns::downscale(exr->image, o.tile_width);
@@ -57,7 +72,7 @@ void run(const SheetOptions& o) {
   for (std::size_t i = 0, k = 0; i < tiles.size(); ++i)
     if (tiles[i].error.empty()) tiles[i].frame = &frames[k++];
   const auto title = fmt::format("{}  EXPOSURE {:+g} EV, SDR {:g} CD/M2", std::filesystem::path(o.input).filename().string(),
-                                 o.pipeline.exposure_ev, base.target.peak_nits);
+                                 base.exposure.compensation_ev, base.target.peak_nits);
   auto png = patterns::contact_sheet(tiles, title, o.columns).png();
   if (!png) throw HdrdError(png.error());
   if (auto ok = io::atomic_write(o.output, *png); !ok) throw HdrdError(ok.error());
@@ -73,7 +88,7 @@ void setup(CLI::App& root) {
   app->add_option("-o,--output", o->output, "Output PNG")->required();
   app->add_option("--tile-width", o->tile_width, "Width of each tile (default 320)");
   app->add_option("--columns", o->columns, "Tiles per row (default 4)");
-  add_pipeline_options(*app, o->pipeline);
+  add_setting_options(*app, job::Source::encode, job::Reach::cli, o->args);
   add_common_options(*app, o->common);
   app->footer(
       "Examples:\n"

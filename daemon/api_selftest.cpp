@@ -1,90 +1,74 @@
-// POST /v1/pattern and POST /v1/selftest (docs/api.md): the standard test patterns and the
-// display-mode suite of patterns/ (issue 7), behind the same request validation, content
-// negotiation, scheduling and dumps as /v1/render.
+// POST /v1/selftest (docs/api.md): the display-mode suite of patterns/ for one mode, its
+// built-in scenes rendered on a render worker; and the pattern list GET /v1/capabilities
+// publishes. (POST /v1/pattern is a frame job: api_frame.cpp.)
+#include <algorithm>
 #include <mutex>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "daemon/api_support.hpp"
-#include "daemon/output.hpp"
-#include "daemon/pattern_catalogue.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
 #include "encode/pipeline.hpp"
-
-#if defined(HDRD_PATTERNS_AVAILABLE) && __has_include("patterns/patterns.hpp")
+#include "job/pattern_params.hpp"
 #include "patterns/patterns.hpp"
 #include "patterns/selftest.hpp"
-#define HDRD_HAVE_PATTERNS 1
-#endif
 
 namespace hdrd::daemon {
 
 using nlohmann::json;
 
-#ifdef HDRD_HAVE_PATTERNS
 namespace {
 
-// ---- patterns -----------------------------------------------------------------------------
+// ---- the display-mode suite ---------------------------------------------------------------
 
-struct PatternJobState {
-  Request request;
-  OutputKind output = OutputKind::png;
-  std::string dump_name;
-  std::shared_ptr<const Config> config;
+// POST /v1/selftest's body: {"mode", "peak_nits", "render", "timeout_s"}, all optional (an
+// empty body is hdr10 at its default peak, as `hdrd selftest` without options).
+struct SelftestRequest {
+  std::string mode = "hdr10";             // sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb, hlg
+  std::optional<double> peak_nits;        // default: the mode's
+  bool render = true;                     // also render the built-in scenes
+  std::optional<double> timeout_s;
+  json canonical() const {
+    return {{"endpoint", "selftest"}, {"mode", mode}, {"peak_nits", peak_nits ? json(*peak_nits) : json(nullptr)},
+            {"render", render}};
+  }
 };
 
-patterns::PatternOptions pattern_options(const Request& q) {
-  patterns::PatternOptions o;
-  o.width = q.width;
-  o.height = q.height;
-  o.level_nits = q.pattern.level_nits;
-  o.area_percent = q.pattern.area_percent;
-  o.steps = q.pattern.steps;
-  o.labels = q.pattern.labels;
-  return o;
-}
+constexpr std::string_view kSelftestModes[] = {"sdr-srgb", "sdr", "sdr-bt1886", "hdr10", "scrgb", "hlg"};
 
-// The pattern library names its own options (--level, --area, --mode); the API's are
-// request fields.
-Error as_request_error(Error e) {
-  if (e.field == "mode") e.field = "display.mode";
-  else if (e.field == "level") e.field = "params.level_nits";
-  else if (e.field == "area") e.field = "params.area_percent";
-  return e;
+Result<SelftestRequest> parse_selftest_request(std::string_view body, const job::Limits& limits) {
+  SelftestRequest r;
+  if (body.find_first_not_of(" \t\r\n") == std::string_view::npos) return r;
+  if (body.size() > limits.max_body_bytes || job::json_nesting_depth(body) > limits.max_json_depth)
+    return make_error("request.limit", "selftest request too large or too deeply nested");
+  const json doc = json::parse(body, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object() || body.find('\0') != std::string_view::npos)
+    return make_error("request.syntax", "the selftest request is not a JSON object");
+  for (auto it = doc.begin(); it != doc.end(); ++it) {
+    const std::string& k = it.key();
+    const json& v = *it;
+    const std::string shown = one_line(k.substr(0, 64));
+    if (k == "mode") {
+      if (!v.is_string() || std::find(std::begin(kSelftestModes), std::end(kSelftestModes), v.get<std::string>()) ==
+                                std::end(kSelftestModes))
+        return make_error("request.value", "mode: one of sdr-srgb, sdr, sdr-bt1886, hdr10, scrgb, hlg", "mode");
+      r.mode = v.get<std::string>();
+    } else if (k == "peak_nits" || k == "timeout_s") {
+      const double max = k == "peak_nits" ? 10000 : limits.max_request_seconds;
+      if (!v.is_number() || !(v.get<double>() >= 1e-3 && v.get<double>() <= max))
+        return make_error("request.value", fmt::format("{}: a number in [0.001, {:g}]", k, max), k);
+      (k == "peak_nits" ? r.peak_nits : r.timeout_s) = v.get<double>();
+    } else if (k == "render") {
+      if (!v.is_boolean()) return make_error("request.type", "render: expected true or false", "render");
+      r.render = v.get<bool>();
+    } else {
+      return make_error("request.unknown_field", fmt::format("{}: unknown field", shown), k.substr(0, 64));
+    }
+  }
+  return r;
 }
-
-// What the client should know about the frame it gets: BT.2111 bars are narrow-range
-// 10-bit whatever the display said; a level above the peak is clipped by the encoder.
-void pattern_notes(const EncodedFrame& f, const DisplayTarget& asked, std::vector<std::string>* warnings) {
-  const std::string name = f.settings["pattern"]["name"].get<std::string>();
-  if (f.target.range != asked.range || f.target.bits != asked.bits)
-    warnings->push_back(fmt::format("{} is defined as {}-bit {} range codes: sent that way", name, f.target.bits,
-                                    to_string(f.target.range)));
-  if (f.settings["pattern"].contains("note")) warnings->push_back(f.settings["pattern"]["note"].get<std::string>());
-}
-
-Reply pattern_finish(const PatternJobState& st, Metrics& metrics) {
-  const Request& q = st.request;
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<std::string> warnings;
-  auto target = resolve_display(q.display, &warnings);
-  if (!target) return Reply::error(target.error());
-  auto frame = patterns::make_pattern(q.pattern.name, *target, pattern_options(q), needs_display_nits(q, st.output));
-  if (!frame) return Reply::error(as_request_error(frame.error()));
-  pattern_notes(*frame, *target, &warnings);
-  const double encode_s = seconds_since(t0);
-  metrics.stage_time("encode", encode_s);
-  const auto t1 = std::chrono::steady_clock::now();
-  auto reply = answer_frame(*frame, q, st.output, st.config->paths.dump_dir, st.dump_name, warnings);
-  if (!reply) return Reply::error(reply.error());
-  metrics.stage_time("serialize", seconds_since(t1));
-  reply->headers.emplace_back("X-Hdrd-Pattern", q.pattern.name);
-  reply->headers.emplace_back("X-Hdrd-Encode-Ms", fmt::format("{:.1f}", encode_s * 1e3));
-  return std::move(*reply);
-}
-
-// ---- the display-mode suite ---------------------------------------------------------------
 
 struct RenderedScene {
   std::string name;
@@ -103,7 +87,6 @@ struct SelftestJobState {
 // pipeline, small enough to keep a self-test well under a second on llvmpipe.
 constexpr int kSceneWidth = 96, kSceneHeight = 54;
 
-#ifdef HDRD_HAVE_RENDERER
 // Render stage, on a render worker with its own renderer: the built-in scenes, as
 // patterns::run_suite renders them when it owns a renderer (it would otherwise create a
 // second GL context on an encode thread).
@@ -124,7 +107,6 @@ Result<void> selftest_render(SelftestJobState& st, RenderResource* res, const Jo
   st.render_s = seconds_since(t0);
   return {};
 }
-#endif
 
 // The rendered scenes' checks, as patterns::run_suite makes them: histogram exposure,
 // then no code above the peak and MaxCLL/MaxFALL equal to the decoded codes.
@@ -177,58 +159,25 @@ Reply selftest_finish(const SelftestJobState& st) {
 }
 
 }  // namespace
-#endif
 
 json Service::pattern_capabilities() {
   json out = json::array();
-  for (const auto& entry : pattern_catalogue()) {
-    json j = pattern_entry_json(entry);
-#ifdef HDRD_HAVE_PATTERNS
+  for (const auto& entry : job::pattern_catalogue()) {
+    json j = job::pattern_entry_json(entry);
     if (const auto* info = patterns::find_pattern(entry.name)) {
       j["description"] = info->description;
       j["source"] = info->source;
     }
-#endif
     out.push_back(std::move(j));
   }
   return out;
 }
 
-void Service::post_pattern(HttpRequest& http, std::shared_ptr<Responder> responder) {
-  const auto cfg = config();
-  if (auto bad = check_json_post(http)) return responder->reply(Reply::error(*bad));
-  ParseContext ctx{Endpoint::pattern, cfg->limits, cfg->render, cfg->paths.asset_root};
-  auto req = parse_request(http.body, ctx);
-  if (!req) return responder->reply(Reply::error(req.error()));
-  auto output = negotiate_output(http.header("accept"), req->display.target.mode, req->dump);
-  if (!output) return responder->reply(Reply::error(output.error()));
-#ifndef HDRD_HAVE_PATTERNS
-  responder->reply(Reply::error(make_error("pipeline.unavailable", "test patterns are not available in this build")));
-#else
-  auto st = std::make_shared<PatternJobState>();
-  st->request = std::move(*req);
-  st->output = *output;
-  st->config = cfg;
-  st->dump_name = st->request.name.empty() ? generated_name("pattern", http.id) : st->request.name;
-  JobSpec spec;
-  spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
-  if (!st->request.dump) spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output));
-  Metrics* metrics = &metrics_;
-  spec.finish = [st, metrics](const JobControl&) { return pattern_finish(*st, *metrics); };
-  submit(std::move(spec), false, responder);
-#endif
-}
-
 void Service::post_selftest(HttpRequest& http, std::shared_ptr<Responder> responder) {
   const auto cfg = config();
   if (auto bad = check_json_post(http)) return responder->reply(Reply::error(*bad));
-  ParseContext ctx{Endpoint::render, cfg->limits, cfg->render, cfg->paths.asset_root};
-  auto req = parse_selftest_request(http.body, ctx);
+  auto req = parse_selftest_request(http.body, cfg->limits);
   if (!req) return responder->reply(Reply::error(req.error()));
-#ifndef HDRD_HAVE_PATTERNS
-  responder->reply(
-      Reply::error(make_error("pipeline.unavailable", "the display-mode suite is not available in this build")));
-#else
   auto target = patterns::suite_target(req->mode, req->peak_nits);
   if (!target) {
     Error e = target.error();
@@ -245,13 +194,10 @@ void Service::post_selftest(HttpRequest& http, std::shared_ptr<Responder> respon
   JobSpec spec;
   spec.deadline = request_deadline(http, req->timeout_s, *cfg);
   spec.key = canonical_key(req->canonical());
-#ifdef HDRD_HAVE_RENDERER
   if (render)
     spec.render = [st](RenderResource* res, const JobControl& control) { return selftest_render(*st, res, control); };
-#endif
   spec.finish = [st](const JobControl&) { return selftest_finish(*st); };
   submit(std::move(spec), render, responder);
-#endif
 }
 
 }  // namespace hdrd::daemon

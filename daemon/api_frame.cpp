@@ -1,0 +1,180 @@
+// POST /v1/render, /v1/encode, /v1/pattern: the daemon's transport for the one frame job
+// (job/frame_job.hpp). The request is parsed by the same parser as the CLI's flags, the
+// job is the same; only where the request comes from (a JSON body, query parameters, a
+// multipart upload) and where the outputs go (the reply body, or the dump directory)
+// are the daemon's.
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "daemon/accept.hpp"
+#include "daemon/api_support.hpp"
+#include "daemon/frame_reply.hpp"
+#include "daemon/paths.hpp"
+#include "daemon/render_worker.hpp"
+#include "daemon/service.hpp"
+#include "job/frame_job.hpp"
+
+namespace hdrd::daemon {
+
+using nlohmann::json;
+
+namespace {
+
+std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 1469598103934665603ull) {
+  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+job::ParseContext daemon_context(job::Source source, job::Spelling spelling, const Config& cfg) {
+  job::ParseContext ctx;
+  ctx.source = source;
+  ctx.spelling = spelling;
+  ctx.reach = job::Reach::daemon;
+  ctx.limits = cfg.limits;
+  ctx.resolve_path = [root = cfg.paths.asset_root](std::string_view p, const std::string& field) {
+    return resolve_in_root(root, p, field);
+  };
+  return ctx;
+}
+
+// The options of a POST /v1/encode: the JSON part of a multipart body, or the query
+// string of a raw EXR body. The EXR is moved into `exr`.
+Result<json> encode_options(HttpRequest& http, const Config& cfg, std::string& exr, job::Spelling& spelling) {
+  if (http.multipart) {
+    if (!http.query.empty())
+      return make_error("request.conflict",
+                        "multipart uploads carry their options in the 'request' part, not the query string",
+                        http.query[0].first.substr(0, 64));
+    json options = json::object();
+    bool have_image = false;
+    for (auto& p : http.parts) {
+      if (p.name == "image" && !have_image) {
+        exr = std::move(p.data);
+        have_image = true;
+      } else if (p.name == "request") {
+        // Bounded before it is parsed, as a JSON body is: size, NUL, nesting depth.
+        if (p.data.size() > cfg.limits.max_body_bytes)
+          return make_error("request.limit", fmt::format("the 'request' part of {} bytes exceeds {} bytes", p.data.size(),
+                                                         cfg.limits.max_body_bytes), "request");
+        if (job::json_nesting_depth(p.data) > cfg.limits.max_json_depth)
+          return make_error("request.depth",
+                            fmt::format("the 'request' part nests deeper than {} levels", cfg.limits.max_json_depth),
+                            "request");
+        options = json::parse(p.data, nullptr, false);
+        if (options.is_discarded() || !options.is_object() || p.data.find('\0') != std::string::npos)
+          return make_error("request.syntax", "the 'request' part is not a JSON object", "request");
+      } else {
+        return make_error("request.unknown_field",
+                          fmt::format("multipart part '{}': expected 'image' and 'request'", one_line(p.name.substr(0, 64))),
+                          p.name.substr(0, 64));
+      }
+    }
+    if (!have_image) return make_error("request.value", "multipart body has no 'image' part (the EXR)", "image");
+    return options;
+  }
+  const std::string mt = media_type(http);
+  if (mt != "image/x-exr" && mt != "application/octet-stream" && mt != "image/aces")
+    return make_error("request.media_type",
+                      "POST /v1/encode takes an OpenEXR body (Content-Type: image/x-exr) or multipart/form-data");
+  spelling = job::Spelling::query;
+  auto q = job::query_to_request_json(http.query);
+  if (!q) return q.error();
+  exr = std::move(http.body);
+  return std::move(*q);
+}
+
+struct FrameJobState {
+  std::unique_ptr<job::FrameJob> job;
+  std::optional<job::Output> reply;  // the body's format; unset: a dump
+  std::string dump_name;
+  std::shared_ptr<const Config> config;
+  Metrics* metrics = nullptr;
+};
+
+std::string_view prefix_of(job::Source s) { return job::to_string(s); }
+
+}  // namespace
+
+void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<Responder> responder) {
+  const auto cfg = config();
+  json options;
+  std::string exr;
+  job::Spelling spelling = job::Spelling::json;
+  if (source == job::Source::encode) {
+    auto o = encode_options(http, *cfg, exr, spelling);
+    if (!o) return responder->reply(Reply::error(o.error()));
+    options = std::move(*o);
+    if (exr.empty()) return responder->reply(Reply::error(make_error("request.value", "empty EXR upload", "image")));
+  } else {
+    if (auto bad = check_json_post(http)) return responder->reply(Reply::error(*bad));
+  }
+  const auto ctx = daemon_context(source, spelling, *cfg);
+  auto request = source == job::Source::encode ? job::parse_request_json(options, ctx) : job::parse_request(http.body, ctx);
+  if (!request) return responder->reply(Reply::error(request.error()));
+  const bool dump = request->boolean("dump");
+  const std::string name = request->text("name");
+  const std::optional<double> timeout_s = request->optional_number("timeout_s");
+  const std::string key = canonical_key(request->canonical());
+
+  job::JobOptions jo;
+  jo.threads = encode_threads_per_job(*cfg);
+  // Files named by a request were resolved inside the asset root; JSON scenes may not
+  // reach further files (their paths are not checked against the root).
+  jo.scene_files = false;
+  jo.scene_base_dir = cfg->paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg->paths.asset_root;
+  jo.max_lights = cfg->limits.max_lights;
+  job::EncodeInput input;
+  if (source == job::Source::encode) {
+    input.bytes.assign(exr.begin(), exr.end());
+    input.name = "upload";
+  }
+  auto st = std::make_shared<FrameJobState>();
+  auto made = job::FrameJob::create(std::move(*request), jo, std::move(input));
+  if (!made) return responder->reply(Reply::error(made.error()));
+  st->job = std::move(*made);
+  if (!dump) {
+    auto output = negotiate_output(http.header("accept"), st->job->target().mode);
+    if (!output) return responder->reply(Reply::error(output.error()));
+    if (auto ok = st->job->set_outputs({*output}); !ok) return responder->reply(Reply::error(ok.error()));
+    st->reply = *output;
+  } else {
+    if (auto ok = accepts_json(http.header("accept")); !ok) return responder->reply(Reply::error(ok.error()));
+    if (cfg->paths.dump_dir.empty())
+      return responder->reply(Reply::error(make_error("path.forbidden", "no dump directory is configured ([paths] dump_dir)", "dump")));
+  }
+  st->config = cfg;
+  st->metrics = &metrics_;
+  st->dump_name = name.empty() ? generated_name(prefix_of(source), http.id) : name;
+
+  JobSpec spec;
+  spec.deadline = request_deadline(http, timeout_s, *cfg);
+  if (!dump)
+    spec.key = key + "|" + std::string(job::output_info(*st->reply).content_type) +
+               (exr.empty() ? "" : fmt::format("|exr:{}:{:016x}", exr.size(), fnv1a(exr)));
+  const bool renders = st->job->needs_renderer();
+  if (renders) {
+    spec.render = [st](RenderResource* res, const JobControl& control) -> Result<void> {
+      auto* rr = dynamic_cast<RendererResource*>(res);
+      if (!rr) return make_error("renderer.unavailable", "renderer not available on this worker");
+      st->job->set_stop([&control] { return control.should_stop(); });
+      auto ok = st->job->render(*rr->renderer);
+      st->job->set_stop({});
+      return ok;
+    };
+  }
+  spec.finish = [st](const JobControl& control) {
+    st->job->set_stop([&control] { return control.should_stop(); });
+    auto result = st->job->finish();
+    st->job->set_stop({});
+    if (!result) return Reply::error(result.error());
+    for (const auto& [stage, ms] : result->timings_ms.items())
+      if (stage == "render" || stage == "encode" || stage == "outputs")
+        st->metrics->stage_time(stage == "outputs" ? "serialize" : stage, ms.get<double>() / 1e3);
+    auto reply = st->reply ? frame_reply(*result, *st->reply)
+                           : dump_reply(*result, st->config->paths.dump_dir, st->dump_name);
+    return reply ? std::move(*reply) : Reply::error(reply.error());
+  };
+  submit(std::move(spec), renders, responder);
+}
+
+}  // namespace hdrd::daemon

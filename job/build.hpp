@@ -1,0 +1,43 @@
+// Where the settings are used: a validated request turned into what the libraries take
+// (the display target, EncodeSettings, the renderer's request, the pattern's options).
+// Every run-time default is decided here, once, for every front end.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "encode/pipeline.hpp"
+#include "job/frame_job.hpp"
+#include "job/request.hpp"
+#include "patterns/patterns.hpp"
+#include "shading/renderer.hpp"
+
+namespace hdrd::job {
+
+// The levels resolver (encode/display_target.hpp resolve_target) fed with the display the
+// request names (display.connector / display.edid, then display.profile) and the request's
+// own levels. A connector that is not attached (headless) keeps the mode's defaults, with a
+// warning. Errors from reading an EDID keep their code (edid.*: 422 in the daemon).
+Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::string>* warnings);
+
+// bt2111 exists for hdr10 and hlg: checked once the display has decided the mode.
+Result<void> check_pattern_mode(const FrameRequest& r, const DisplayTarget& target);
+
+// Tone curve, exposure settings, gamut, dither, the grade (loaded) and the UI overlay
+// (decoded, its declared size checked first). The exposure mode is decided by
+// exposure_mode() once the source is known.
+Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarget& target, int threads,
+                                       std::vector<std::string>* warnings);
+
+// The exposure rule (exposure.mode "auto", RTR4 §8.2.2: meter the light, not the pixels):
+// camera when ev100 is given; light-based when the illuminance is known (a render's
+// dominant light, or exposure.illuminance_lux); a render without one: histogram; EXR
+// input: manual (relative input is already exposed, absolute input keeps its cd/m2).
+exposure::Mode exposure_mode(const FrameRequest& r, bool illuminance_known);
+
+shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& options);
+patterns::PatternOptions pattern_options(const FrameRequest& r);
+// The pattern library names its own options (--level, --area); the request's are settings.
+Error pattern_error(Error e);
+
+}  // namespace hdrd::job

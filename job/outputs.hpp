@@ -1,0 +1,47 @@
+// The outputs a frame job can produce: one table (name, file suffix, media type, what the
+// encoder must keep for it, which sources and modes it applies to). `formats` in a request
+// (--format on the CLI) names them; the daemon's Accept negotiation picks one of the
+// replyable ones as the body; dumps write each as OUTBASE<suffix> next to OUTBASE.json.
+// A new delivery format is one entry here plus its writer (job/frame_job.cpp).
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "encode/display_target.hpp"
+#include "job/settings.hpp"
+
+namespace hdrd::job {
+
+enum class Output { png, exr, raw, scene_exr, heatmap };
+
+struct OutputInfo {
+  Output id;
+  std::string_view name;          // as in `formats`: "png", "scene-exr"
+  std::string_view suffix;        // appended to OUTBASE: ".png", ".scene.exr"
+  std::string_view content_type;  // of the bytes
+  std::string_view doc;
+  Sources sources;                // which requests can make it
+  bool reply;                     // can be the body of a daemon reply (Accept)
+  bool in_default_dump;           // part of a dump that names no formats
+  bool needs_display_nits;        // the encoder keeps display light (EncodedFrame::display_nits)
+  bool needs_signal16;            // the encoder keeps 16-bit PNG samples
+  bool needs_scene_frame;         // the renderer's full scene-referred frame
+  bool (*for_mode)(Mode);         // null: every mode
+};
+
+std::span<const OutputInfo> outputs();
+const OutputInfo& output_info(Output o);
+const OutputInfo* find_output(std::string_view name);
+std::span<const std::string_view> output_names();  // the `formats` choices
+bool applies(const OutputInfo& o, Source source, Mode mode);
+
+// The outputs of a dump that names none: every default one that applies.
+std::vector<Output> default_outputs(Source source, Mode mode);
+// `formats` as outputs; errors name the setting when one does not apply to the mode or source.
+Result<std::vector<Output>> outputs_from_names(const std::vector<std::string>& names, Source source, Mode mode,
+                                               std::string_view field_label = "formats");
+
+}  // namespace hdrd::job

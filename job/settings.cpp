@@ -1,0 +1,446 @@
+#include "job/settings.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "encode/display_target.hpp"
+#include "job/outputs.hpp"
+
+namespace hdrd::job {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::string_view kRanges[] = {"full", "narrow"};
+constexpr std::string_view kSdrCurves[] = {"srgb", "gamma22"};
+constexpr std::string_view kApply[] = {"per-channel", "max-rgb", "luminance", "rgb"};
+constexpr std::string_view kGamut[] = {"ictcp", "clip"};
+constexpr std::string_view kExposureModes[] = {"auto", "manual", "camera", "log-average", "histogram", "light"};
+constexpr std::string_view kBlend[] = {"linear", "srgb"};
+constexpr std::string_view kPlacement[] = {"scene", "display", "baked"};
+constexpr std::string_view kEncoder[] = {"auto", "gpu", "cpu"};
+constexpr std::string_view kInputUnits[] = {"relative", "absolute"};
+constexpr std::string_view kBackends[] = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
+
+// The table. Order is the order of --help, docs/settings.md and capabilities.
+std::vector<Setting> make_table() {
+  using T = Type;
+  const auto modes = mode_names();
+  return {
+      // ---- the display (REFERENCE.md §1.4, §1.8, §1.9) ----
+      {.path = "display.mode", .type = T::choice, .sources = kAllSources,
+       .doc = "Output mode", .choices = modes,
+       .default_doc = "the display's (display.connector / display.edid), else hdr10",
+       .flag = "--mode", .metavar = "MODE", .query = "mode", .header = "X-Hdrd-Mode"},
+      {.path = "display.peak_nits", .type = T::number, .sources = kAllSources,
+       .doc = "Display peak luminance", .unit = "cd/m2", .min = 1e-3, .max = 10000,
+       .default_doc = "the display's, else the mode's: hdr10/hlg/scrgb 1000, sdr 100",
+       .flag = "--peak", .metavar = "NITS", .query = "peak_nits", .header = "X-Hdrd-Peak-Nits"},
+      {.path = "display.black_nits", .type = T::number, .sources = kAllSources,
+       .doc = "Display black luminance", .unit = "cd/m2", .min = 0, .max = 10000,
+       .default_doc = "the display's, else the mode's: hdr10 0.005, sdr 0.1, hlg/scrgb 0",
+       .flag = "--black", .metavar = "NITS", .query = "black_nits", .header = "X-Hdrd-Black-Nits"},
+      {.path = "display.paper_white_nits", .type = T::number, .sources = kAllSources,
+       .doc = "Luminance of relative 1.0 (diffuse white)", .unit = "cd/m2", .min = 1e-3, .max = 10000,
+       .default_doc = "HDR modes 203 (BT.2408), SDR modes = the peak",
+       .flag = "--paper-white", .metavar = "NITS", .query = "paper_white_nits", .header = "X-Hdrd-Paper-White-Nits"},
+      {.path = "display.ui_white_nits", .type = T::number, .sources = kAllSources,
+       .doc = "Luminance of UI white", .unit = "cd/m2", .min = 1e-3, .max = 10000,
+       .default_doc = "= paper white", .flag = "--ui-white", .metavar = "NITS", .query = "ui_white_nits"},
+      {.path = "display.sdr_white_nits", .type = T::number, .sources = kAllSources,
+       .doc = "Where SDR content's white lands in an HDR frame", .unit = "cd/m2", .min = 1e-3, .max = 10000,
+       .default_doc = "= paper white", .flag = "--sdr-white", .metavar = "NITS", .query = "sdr_white_nits"},
+      {.path = "display.range", .type = T::choice, .sources = kAllSources,
+       .doc = "Code range (KMS scan-out is always full)", .choices = kRanges,
+       .default_doc = "full (bt2111 bars: narrow, as the standard defines them)",
+       .flag = "--range", .metavar = "RANGE", .query = "range", .header = "X-Hdrd-Range"},
+      {.path = "display.bits", .type = T::integer, .sources = kAllSources,
+       .doc = "Bits per channel: 10 (hdr10, hlg), 8 or 10 (sdr), 16 (scrgb)", .min = 8, .max = 16,
+       .default_doc = "the mode's: 10, SDR 8, scRGB 16", .flag = "--bits", .metavar = "N", .query = "bits",
+       .header = "X-Hdrd-Bits"},
+      {.path = "display.sdr_curve", .type = T::choice, .sources = kAllSources,
+       .doc = "SDR transfer: srgb (piecewise) or gamma22", .choices = kSdrCurves, .default_json = "\"srgb\"",
+       .flag = "--sdr-curve", .metavar = "CURVE", .query = "sdr_curve"},
+      {.path = "display.connector", .type = T::text, .sources = kAllSources,
+       .doc = "Take mode, levels and primaries from an attached display: 'auto' (the first HDR-capable one) "
+              "or a connector name",
+       .default_doc = "none", .flag = "--display", .metavar = "auto|NAME", .query = "display", .max_length = 64},
+      {.path = "display.edid", .type = T::path, .sources = kAllSources,
+       .doc = "Take mode, levels and primaries from an EDID file", .default_doc = "none", .flag = "--edid",
+       .metavar = "FILE", .query = "edid", .max_length = 4096},
+      {.path = "display.profile", .type = T::path, .sources = kAllSources,
+       .doc = "Display profile override file (TOML or JSON; docs/displays.md)", .default_doc = "none",
+       .flag = "--profile", .metavar = "FILE", .query = "profile", .max_length = 4096},
+
+      // ---- tone mapping (REFERENCE.md §1.3, §1.5) ----
+      {.path = "tone.curve", .type = T::text, .sources = kSceneReferred,
+       .doc = "Tone curve (hdrd tonemap --list; GET /v1/capabilities tone_curves)", .default_json = "\"pq-shoulder\"",
+       .flag = "--tonemap", .metavar = "CURVE", .query = "curve", .header = "X-Hdrd-Tone-Curve", .max_length = 64},
+      {.path = "tone.params", .type = T::number_map, .sources = kSceneReferred,
+       .doc = "Curve parameters by name (ranges: hdrd tonemap --list)", .min = -1e9, .max = 1e9,
+       .default_doc = "each parameter's default", .flag = "--tonemap-param", .metavar = "NAME=VALUE"},
+      {.path = "tone.apply", .type = T::choice, .sources = kSceneReferred,
+       .doc = "How a scalar curve applies: per-channel, max-rgb or luminance", .choices = kApply,
+       .default_doc = "the curve's", .flag = "--tonemap-apply", .metavar = "HOW", .query = "apply"},
+      {.path = "gamut", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Gamut mapping after tone mapping: ictcp (constant hue) or clip", .choices = kGamut,
+       .default_json = "\"ictcp\"", .flag = "--gamut", .metavar = "HOW", .query = "gamut"},
+
+      // ---- exposure (REFERENCE.md §1.2, RTR4 §8.2.2) ----
+      {.path = "exposure.mode", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Exposure: auto = camera when ev100 is given, light-based when the illuminance is known (a render's "
+              "lights, or illuminance_lux), histogram for renders without, manual for EXR input",
+       .choices = kExposureModes, .default_json = "\"auto\"", .flag = "--exposure-mode", .metavar = "MODE",
+       .query = "exposure"},
+      {.path = "exposure.compensation_ev", .type = T::number, .sources = kSceneReferred,
+       .doc = "Compensation in stops, applied last in every mode (+ brightens)", .unit = "stops", .min = -30,
+       .max = 30, .default_json = "0", .flag = "--exposure", .metavar = "EV", .query = "exposure_comp_ev",
+       .alias = "exposure_comp_ev"},
+      {.path = "exposure.gain", .type = T::number, .sources = kSceneReferred, .doc = "Manual mode: extra linear gain",
+       .min = 1e-9, .max = 1e9, .default_json = "1", .flag = "--gain", .metavar = "K", .query = "gain"},
+      {.path = "exposure.ev100", .type = T::number, .sources = kSceneReferred,
+       .doc = "Camera exposure value at ISO 100 (implies the camera mode)", .unit = "EV", .min = -30, .max = 40,
+       .default_doc = "from aperture, shutter and ISO", .flag = "--ev100", .metavar = "EV", .query = "ev100"},
+      {.path = "exposure.aperture_f", .type = T::number, .sources = kSceneReferred, .doc = "Camera f-number",
+       .min = 0.5, .max = 128, .default_json = "16", .flag = "--aperture", .metavar = "N", .query = "aperture",
+       .alias = "exposure.aperture"},
+      {.path = "exposure.shutter_s", .type = T::number, .sources = kSceneReferred, .doc = "Camera shutter time",
+       .unit = "s", .min = 1e-6, .max = 3600, .default_json = "0.008", .flag = "--shutter", .metavar = "S",
+       .query = "shutter", .alias = "exposure.shutter"},
+      {.path = "exposure.iso", .type = T::number, .sources = kSceneReferred, .doc = "Camera ISO", .min = 1, .max = 1e7,
+       .default_json = "100", .flag = "--iso", .metavar = "ISO", .query = "iso"},
+      {.path = "exposure.percentile", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram mode: the percentile metered", .unit = "%", .min = 0, .max = 100, .default_json = "50",
+       .flag = "--percentile", .metavar = "P", .query = "percentile"},
+      {.path = "exposure.percentile_target", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram mode: the relative value the percentile maps to", .min = 1e-6, .max = 1e4,
+       .default_json = "0.18", .flag = "--percentile-target", .metavar = "V", .query = "percentile_target"},
+      {.path = "exposure.ignore_dark_fraction", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram mode: fraction of the darkest pixels ignored", .min = 0, .max = 0.99, .default_json = "0",
+       .flag = "--ignore-dark", .metavar = "F", .query = "ignore_dark_fraction"},
+      {.path = "exposure.ignore_bright_fraction", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram mode: fraction of the brightest pixels ignored", .min = 0, .max = 0.99,
+       .default_json = "0.02", .flag = "--ignore-bright", .metavar = "F", .query = "ignore_bright_fraction"},
+      {.path = "exposure.illuminance_lux", .type = T::number, .sources = kSceneReferred,
+       .doc = "Light mode: the dominant illuminance", .unit = "lux", .min = 1e-6, .max = 1e7,
+       .default_doc = "a render's dominant light", .flag = "--illuminance", .metavar = "LUX", .query = "illuminance_lux"},
+
+      // ---- UI overlay (REFERENCE.md §1.6) ----
+      {.path = "ui.path", .type = T::path, .sources = kSceneReferred,
+       .doc = "UI overlay: an sRGB RGBA PNG composited at UI white", .default_doc = "none", .flag = "--ui",
+       .metavar = "PNG", .query = "ui", .max_length = 4096},
+      {.path = "ui.png_base64", .type = T::base64, .sources = kSceneReferred,
+       .doc = "UI overlay PNG uploaded in the request body (base64)", .default_doc = "none",
+       .reach = Reach::daemon},
+      {.path = "ui.premultiplied", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "The overlay's alpha is premultiplied", .default_json = "false", .flag = "--ui-premultiplied",
+       .query = "ui_premultiplied"},
+      {.path = "ui.x", .type = T::integer, .sources = kSceneReferred, .doc = "Overlay left edge in output pixels",
+       .unit = "px", .min = -16384, .max = 16384, .default_json = "0", .query = "ui_x"},
+      {.path = "ui.y", .type = T::integer, .sources = kSceneReferred, .doc = "Overlay top edge in output pixels",
+       .unit = "px", .min = -16384, .max = 16384, .default_json = "0", .query = "ui_y"},
+      {.path = "ui.scale", .type = T::number, .sources = kSceneReferred,
+       .doc = "Overlay pixel size in output pixels (bilinear)", .min = 1e-3, .max = 64, .default_json = "1",
+       .flag = "--ui-scale", .metavar = "K", .query = "ui_scale"},
+      {.path = "ui.blend", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Blend in linear light, or in sRGB for UIs authored that way", .choices = kBlend,
+       .default_json = "\"linear\"", .flag = "--ui-blend", .metavar = "HOW", .query = "ui_blend"},
+      {.path = "ui.dim", .type = T::number, .sources = kSceneReferred,
+       .doc = "Dim the frame under translucent UI by this fraction of alpha", .min = 0, .max = 1, .default_json = "0",
+       .flag = "--ui-dim", .metavar = "F", .query = "ui_dim"},
+
+      // ---- grading (RTR4 §8.2.3; docs/grading.md) ----
+      {.path = "grade.lut", .type = T::path, .sources = kSceneReferred,
+       .doc = "3D LUT (.cube, or any format OpenColorIO reads)", .default_doc = "none", .flag = "--lut",
+       .metavar = "FILE", .query = "lut", .max_length = 4096},
+      {.path = "grade.shaper", .type = T::text, .sources = kSceneReferred,
+       .doc = "Shaper of a scene-referred LUT: pq, log2, sqrt, sqrt-sqrt or none, optionally with its range "
+              "(log2:-8:8, sqrt:16)",
+       .default_doc = "the LUT file's, else pq", .flag = "--lut-shaper", .metavar = "SPEC", .query = "shaper",
+       .max_length = 64},
+      {.path = "grade.placement", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Where the LUT applies: scene (before the tone curve), display (after) or baked (replaces it)",
+       .choices = kPlacement, .default_json = "\"display\"", .flag = "--grade", .metavar = "WHERE",
+       .query = "placement"},
+      {.path = "grade.trilinear", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Trilinear instead of tetrahedral LUT interpolation", .default_json = "false", .flag = "--lut-trilinear",
+       .query = "trilinear"},
+      {.path = "grade.ocio_config", .type = T::path, .sources = kSceneReferred, .doc = "OpenColorIO config",
+       .default_doc = "$OCIO", .flag = "--ocio-config", .metavar = "FILE", .query = "ocio_config", .max_length = 4096},
+      {.path = "grade.ocio_look", .type = T::text, .sources = kSceneReferred, .doc = "OpenColorIO look to apply",
+       .default_doc = "none", .flag = "--ocio-look", .metavar = "LOOK", .query = "ocio_look"},
+      {.path = "grade.ocio_display", .type = T::text, .sources = kSceneReferred,
+       .doc = "OpenColorIO display (with grade.ocio_view)", .default_doc = "none", .flag = "--ocio-display",
+       .metavar = "DISPLAY", .query = "ocio_display"},
+      {.path = "grade.ocio_view", .type = T::text, .sources = kSceneReferred,
+       .doc = "OpenColorIO view (with grade.ocio_display)", .default_doc = "none", .flag = "--ocio-view",
+       .metavar = "VIEW", .query = "ocio_view"},
+
+      // ---- the source ----
+      {.path = "scene", .type = T::scene, .sources = kRender,
+       .doc = "A built-in scene (material-grid, fresnel, furnace, hdr, underwater), a .gltf/.glb/.json file, or an "
+              "inline JSON scene (docs/scene-format.md)",
+       .default_json = "\"material-grid\"", .flag = "--scene", .metavar = "NAME|FILE", .max_length = 4096},
+      {.path = "width", .type = T::integer, .sources = kRender | kPattern, .doc = "Frame width", .unit = "px",
+       .min = 1, .max = 16384, .default_json = "1920", .flag = "--width", .metavar = "PX", .query = "width"},
+      {.path = "height", .type = T::integer, .sources = kRender | kPattern, .doc = "Frame height", .unit = "px",
+       .min = 1, .max = 16384, .default_json = "1080", .flag = "--height", .metavar = "PX", .query = "height"},
+      {.path = "samples", .type = T::integer, .sources = kRender, .doc = "MSAA samples, 1 = off (the renderer caps at 16)",
+       .min = 1, .max = 64, .default_json = "4", .flag = "--samples", .metavar = "N", .query = "samples"},
+      {.path = "camera.position", .type = T::vec3, .sources = kRender, .doc = "Camera position (scene units, metres)",
+       .max = 1e6, .default_doc = "the scene's", .flag = "--camera-position", .metavar = "X,Y,Z"},
+      {.path = "camera.target", .type = T::vec3, .sources = kRender, .doc = "Point the camera looks at", .max = 1e6,
+       .default_doc = "the scene's", .flag = "--camera-target", .metavar = "X,Y,Z"},
+      {.path = "camera.fov_y_deg", .type = T::number, .sources = kRender, .doc = "Vertical field of view",
+       .unit = "deg", .min = 1, .max = 179, .default_doc = "the scene's", .flag = "--fov", .metavar = "DEG",
+       .query = "fov_y_deg"},
+      {.path = "encoder", .type = T::choice, .sources = kRender,
+       .doc = "Where a render is encoded: auto = on the GPU when its program covers the request and no output needs "
+              "the CPU's display light (EXR), else the CPU",
+       .choices = kEncoder, .default_json = "\"auto\"", .flag = "--encoder", .metavar = "WHERE", .query = "encoder"},
+      {.path = "input", .type = T::choice, .sources = kEncode, .doc = "How the EXR's values are meant (REFERENCE.md §1.1)",
+       .choices = kInputUnits, .default_doc = "absolute when the file has whiteLuminance, else relative",
+       .flag = "--input", .metavar = "UNITS", .query = "input"},
+      {.path = "pattern", .type = T::text, .sources = kPattern,
+       .doc = "Test pattern: bt2111, pq-ramp, window, near-black, clipping, sdr-grey (docs/patterns.md)",
+       .default_doc = "required", .max_length = 64},
+      {.path = "params.level_nits", .type = T::number, .sources = kPattern,
+       .doc = "window, clipping: the level", .unit = "cd/m2", .min = 1e-4, .max = 10000,
+       .default_doc = "the display's peak", .flag = "--level", .metavar = "NITS", .query = "level_nits"},
+      {.path = "params.area_percent", .type = T::number, .sources = kPattern,
+       .doc = "window: area in percent of the frame (1, 2, 10, 25, 50, 100 are the usual)", .unit = "%", .min = 0.01,
+       .max = 100, .default_json = "10", .flag = "--area", .metavar = "PERCENT", .query = "area_percent"},
+      {.path = "params.steps", .type = T::integer, .sources = kPattern,
+       .doc = "pq-ramp, sdr-grey: number of steps; near-black: how many of its 10 levels", .min = 1, .max = 256,
+       .default_doc = "pq-ramp/sdr-grey 11, near-black 10", .flag = "--steps", .metavar = "N", .query = "steps"},
+      {.path = "params.labels", .type = T::boolean, .sources = kPattern, .doc = "Draw the cd/m2 (or %) labels",
+       .default_json = "true", .flag = "--no-labels", .query = "labels"},
+
+      // ---- outputs ----
+      {.path = "formats", .type = T::choice_list, .sources = kAllSources,
+       .doc = "Files of a dump: png, exr (display light), raw (DRM buffer), scene-exr (a render's scene light), heatmap",
+       .choices = output_names(), .default_doc = "png, exr, raw (scrgb: exr, raw); renders add scene-exr",
+       .flag = "--format", .metavar = "LIST", .query = "formats"},
+      {.path = "dither", .type = T::boolean, .sources = kSceneReferred, .doc = "Ordered dither on code values",
+       .default_json = "false", .flag = "--dither", .query = "dither"},
+      {.path = "dump", .type = T::boolean, .sources = kAllSources,
+       .doc = "Write the dump into the daemon's dump directory and answer its sidecar", .default_json = "false",
+       .query = "dump", .reach = Reach::daemon},
+      {.path = "name", .type = T::text, .sources = kAllSources,
+       .doc = "Base name of a daemon dump ([A-Za-z0-9._-])", .default_doc = "generated", .query = "name",
+       .reach = Reach::daemon},
+      {.path = "timeout_s", .type = T::number, .sources = kAllSources,
+       .doc = "Time limit of the request (at most the daemon's limits.max_request_seconds)", .unit = "s",
+       .min = 1e-3, .max = 1e6, .default_doc = "limits.max_request_seconds", .query = "timeout_s",
+       .reach = Reach::daemon},
+      {.path = "threads", .type = T::integer, .sources = kAllSources,
+       .doc = "Encoder threads, 0 = all cores (the daemon: [workers] encode_threads)", .min = 0, .max = 256,
+       .default_json = "0", .flag = "--threads", .metavar = "N", .reach = Reach::cli},
+      {.path = "backend", .type = T::choice, .sources = kRender,
+       .doc = "GL backend (the daemon: [workers] backend)", .choices = kBackends, .default_json = "\"auto\"",
+       .flag = "--backend", .metavar = "NAME", .reach = Reach::cli},
+  };
+}
+
+const std::vector<Setting>& table() {
+  static const std::vector<Setting> t = make_table();
+  return t;
+}
+
+// --camera px,py,pz[:tx,ty,tz[:fov_deg]]
+bool parse_triple(std::string_view s, json& out) {
+  out = json::array();
+  std::size_t pos = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t end = i < 2 ? s.find(',', pos) : s.size();
+    if (end == std::string_view::npos) return false;
+    double v = 0;
+    const auto part = s.substr(pos, end - pos);
+    const auto [p, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
+    if (ec != std::errc() || p != part.data() + part.size()) return false;
+    out.push_back(v);
+    pos = end + 1;
+  }
+  return true;
+}
+
+json expand_camera(std::string_view text, std::string* error) {
+  json cam = json::object();
+  std::vector<std::string_view> parts;
+  for (std::size_t pos = 0;;) {
+    const auto colon = text.find(':', pos);
+    parts.push_back(text.substr(pos, colon == std::string_view::npos ? std::string_view::npos : colon - pos));
+    if (colon == std::string_view::npos) break;
+    pos = colon + 1;
+  }
+  json v;
+  if (parts.size() > 3 || !parse_triple(parts[0], v)) {
+    *error = "expected px,py,pz[:tx,ty,tz[:fov_deg]]";
+    return nullptr;
+  }
+  cam["position"] = v;
+  if (parts.size() > 1) {
+    if (!parse_triple(parts[1], v)) {
+      *error = "the target is not tx,ty,tz";
+      return nullptr;
+    }
+    cam["target"] = v;
+  }
+  if (parts.size() > 2) {
+    double fov = 0;
+    const auto [p, ec] = std::from_chars(parts[2].data(), parts[2].data() + parts[2].size(), fov);
+    if (ec != std::errc() || p != parts[2].data() + parts[2].size()) {
+      *error = "the field of view is not a number";
+      return nullptr;
+    }
+    cam["fov_y_deg"] = fov;
+  }
+  return {{"camera", cam}};
+}
+
+json expand_ui_pos(std::string_view text, std::string* error) {
+  const auto comma = text.find(',');
+  long long xy[2] = {};
+  const std::string_view parts[2] = {text.substr(0, comma),
+                                     comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1)};
+  for (int i = 0; i < 2; ++i) {
+    const auto [p, ec] = std::from_chars(parts[i].data(), parts[i].data() + parts[i].size(), xy[i]);
+    if (comma == std::string_view::npos || parts[i].empty() || ec != std::errc() ||
+        p != parts[i].data() + parts[i].size()) {
+      *error = "expected X,Y in whole pixels";
+      return nullptr;
+    }
+  }
+  return {{"ui", {{"x", xy[0]}, {"y", xy[1]}}}};
+}
+
+constexpr std::string_view kCameraPaths[] = {"camera.position", "camera.target", "camera.fov_y_deg"};
+constexpr std::string_view kUiPosPaths[] = {"ui.x", "ui.y"};
+const Composite kComposites[] = {
+    {"--camera", "P[:T[:FOV]]", "Camera px,py,pz[:tx,ty,tz[:fov_deg]] (camera.position, .target, .fov_y_deg)",
+     kRender, kCameraPaths, &expand_camera},
+    {"--ui-pos", "X,Y", "Overlay top-left in output pixels (ui.x, ui.y)", kSceneReferred, kUiPosPaths, &expand_ui_pos},
+};
+
+std::string range_text(const Setting& s) {
+  switch (s.type) {
+    case Type::number:
+    case Type::integer: return fmt::format("[{:g}, {:g}]", s.min, s.max);
+    case Type::choice:
+    case Type::choice_list: {
+      std::string c;
+      for (auto v : s.choices) c += (c.empty() ? "" : ", ") + std::string(v);
+      return c;
+    }
+    default: return "";
+  }
+}
+
+std::string sources_text(Sources s) {
+  std::string out;
+  for (Source src : {Source::render, Source::encode, Source::pattern})
+    if (applies(s, src)) out += (out.empty() ? "" : ", ") + std::string(to_string(src));
+  return out;
+}
+
+}  // namespace
+
+std::string_view to_string(Source s) {
+  switch (s) {
+    case Source::render: return "render";
+    case Source::encode: return "encode";
+    case Source::pattern: return "pattern";
+  }
+  return "?";
+}
+
+std::string_view to_string(Type t) {
+  switch (t) {
+    case Type::number: return "number";
+    case Type::integer: return "integer";
+    case Type::boolean: return "boolean";
+    case Type::choice: return "choice";
+    case Type::text: return "string";
+    case Type::path: return "path";
+    case Type::vec3: return "vec3";
+    case Type::number_map: return "map of numbers";
+    case Type::choice_list: return "list";
+    case Type::base64: return "base64";
+    case Type::scene: return "scene";
+  }
+  return "?";
+}
+
+nlohmann::json Setting::default_value() const { return json::parse(default_json); }
+
+std::string Setting::default_text() const {
+  if (!default_doc.empty()) return std::string(default_doc);
+  const json v = default_value();
+  return v.is_string() ? v.get<std::string>() : v.dump();
+}
+
+std::span<const Setting> settings() { return table(); }
+
+const Setting* find_setting(std::string_view path) {
+  for (const auto& s : table())
+    if (s.path == path || (!s.alias.empty() && s.alias == path)) return &s;
+  return nullptr;
+}
+
+bool is_group(std::string_view path) {
+  if (path.empty()) return true;
+  for (const auto& s : table())
+    if (s.path.size() > path.size() && s.path.substr(0, path.size()) == path && s.path[path.size()] == '.') return true;
+  return false;
+}
+
+std::span<const Composite> composites() { return kComposites; }
+
+std::string settings_markdown() {
+  std::string md =
+      "| setting | CLI | query | type | unit | range | default | applies to | what |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
+  auto cell = [](std::string_view s) {
+    std::string out;
+    for (char c : s) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out;
+  };
+  for (const auto& s : table()) {
+    std::string where = sources_text(s.sources);
+    if (s.reach == Reach::daemon) where += " (daemon)";
+    if (s.reach == Reach::cli) where += " (CLI)";
+    md += fmt::format("| `{}`{} | {} | {} | {} | {} | {} | {} | {} | {} |\n", s.path,
+                      s.alias.empty() ? "" : fmt::format(" (or `{}`)", s.alias),
+                      s.flag.empty() ? "" : fmt::format("`{}`", s.flag), s.query.empty() ? "" : fmt::format("`{}`", s.query),
+                      to_string(s.type), s.unit, cell(range_text(s)), cell(s.default_text()), where, cell(s.doc));
+  }
+  md += "\nCLI options that set several settings at once:\n\n";
+  for (const auto& c : kComposites) md += fmt::format("- `{} {}`: {}\n", c.flag, c.metavar, c.doc);
+  return md;
+}
+
+nlohmann::json settings_json() {
+  json out = json::array();
+  for (const auto& s : table()) {
+    json j = {{"path", s.path}, {"type", to_string(s.type)}, {"doc", s.doc}, {"applies_to", json::array()}};
+    for (Source src : {Source::render, Source::encode, Source::pattern})
+      if (s.takes(src)) j["applies_to"].push_back(to_string(src));
+    if (!s.unit.empty()) j["unit"] = s.unit;
+    if (s.type == Type::number || s.type == Type::integer) j["min"] = s.min, j["max"] = s.max;
+    if (!s.choices.empty()) j["choices"] = std::vector<std::string>(s.choices.begin(), s.choices.end());
+    j["default"] = s.default_value();
+    if (!s.default_doc.empty()) j["default_doc"] = s.default_doc;
+    if (!s.flag.empty()) j["cli"] = s.flag;
+    if (!s.query.empty()) j["query"] = s.query;
+    if (!s.alias.empty()) j["alias"] = s.alias;
+    if (s.reach != Reach::everywhere) j["reach"] = s.reach == Reach::daemon ? "daemon" : "cli";
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
+}  // namespace hdrd::job

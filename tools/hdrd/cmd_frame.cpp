@@ -1,0 +1,181 @@
+// hdrd render / encode / pattern: the three sources of the one frame job (job/frame_job.hpp).
+// Each subcommand's options are the settings table's (job/settings.hpp); what the user typed
+// becomes the same JSON request the daemon takes, parsed by the same parser, run by the
+// same job. Only the transport is the CLI's: paths as given, OUTBASE files, stdout/stderr.
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "job/frame_job.hpp"
+#include "patterns/patterns.hpp"
+#include "tools/common/settings_cli.hpp"
+#include "tools/hdrd/command.hpp"
+
+namespace hdrd::cli {
+namespace {
+
+struct FrameCommand {
+  job::Source source = job::Source::render;
+  CommonOptions common;
+  SettingArgs args;
+  std::string outbase;
+  std::string input;    // encode: the EXR
+  std::string pattern;  // pattern: its name
+  bool list = false;    // pattern --list
+};
+
+void print_pattern_list(bool json) {
+  if (json) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& p : patterns::patterns())
+      j.push_back({{"name", p.name}, {"description", p.description}, {"source", p.source}});
+    print_out(j.dump(2));
+    return;
+  }
+  std::string s;
+  for (const auto& p : patterns::patterns()) s += fmt::format("{:11} {} ({})\n", p.name, p.description, p.source);
+  print_out(s);
+}
+
+// The request as the CLI spells it: paths are the user's own (no asset root).
+job::ParseContext cli_context(job::Source source) {
+  job::ParseContext ctx;
+  ctx.source = source;
+  ctx.spelling = job::Spelling::cli;
+  ctx.reach = job::Reach::cli;
+  ctx.resolve_path = [](std::string_view p, const std::string&) -> Result<std::filesystem::path> {
+    return std::filesystem::path(p);
+  };
+  return ctx;
+}
+
+std::string summary_text(const job::FrameResult& r, const std::map<std::string, std::string>& files, bool json) {
+  if (json) {
+    nlohmann::json j = r.sidecar();
+    j["files"] = files;
+    j["timings_ms"] = r.timings_ms;
+    return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  }
+  const auto& f = r.frame;
+  std::string s = fmt::format("{} {}x{} {} peak {} cd/m2, paper white {} cd/m2", to_string(f.target.mode), f.width,
+                              f.height, fourcc_name(f.drm_fourcc), f.target.peak_nits, f.target.paper_white_nits);
+  if (f.target.is_hdr())
+    s += fmt::format(", MaxCLL {:.0f}, MaxFALL {:.0f}", std::ceil(f.content_light.max_cll_nits),
+                     std::ceil(f.content_light.max_fall_nits));
+  s += "\n";
+  for (const auto& [kind, path] : files) s += fmt::format("  {:9} {}\n", kind, path);
+  for (const auto& w : r.warnings) s += "  note: " + w + "\n";
+  return s;
+}
+
+// What the job did and how long each stage took, on stderr (the result is stdout's).
+void report_progress(const job::FrameResult& r) {
+  const auto& t = r.timings_ms;
+  auto ms = [&](const char* stage) { return t.contains(stage) ? t[stage].get<double>() : 0.0; };
+  const auto& f = r.frame;
+  if (f.settings.contains("render")) {
+    const auto& rd = f.settings["render"];
+    progress("rendered {} at {}x{} ({}x MSAA) on {} ({}) in {:.0f} ms", rd.value("scene", ""), f.width, f.height,
+             rd.value("samples", 1), rd.value("backend", ""), rd.value("gl_renderer", ""), ms("render"));
+  }
+  if (t.contains("read")) progress("read the EXR in {:.0f} ms", ms("read"));
+  progress("encoded {} {}x{} on the {} in {:.0f} ms", to_string(f.target.mode), f.width, f.height, r.encoder,
+           ms("encode"));
+  progress("made {} output{} in {:.0f} ms", r.files.size(), r.files.size() == 1 ? "" : "s", ms("outputs"));
+}
+
+void run(const FrameCommand& o) {
+  set_progress_enabled(!o.common.quiet);
+  if (o.source == job::Source::pattern && o.list) return print_pattern_list(o.common.json);
+  if (o.source == job::Source::pattern && o.pattern.empty())
+    throw CliError("a pattern name is required (see hdrd pattern --list)");
+  if (o.outbase.empty()) throw CliError("-o OUTBASE is required");
+  auto doc = request_json(o.args);
+  if (!doc) throw HdrdError(doc.error());
+  if (o.source == job::Source::pattern) (*doc)["pattern"] = o.pattern;
+  const auto ctx = cli_context(o.source);
+  auto request = job::parse_request_json(*doc, ctx);
+  if (!request) throw HdrdError(request.error());
+  job::JobOptions options;
+  options.threads = static_cast<int>(request->integer("threads"));
+  job::EncodeInput input;
+  if (o.source == job::Source::encode) input.path = o.input;
+  auto frame_job = job::FrameJob::create(std::move(*request), options, input);
+  if (!frame_job) throw HdrdError(frame_job.error());
+  auto result = job::run_frame_job(**frame_job);
+  if (!result) throw HdrdError(result.error());
+  report_progress(*result);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto files = job::write_outputs(*result, o.outbase);
+  if (!files) throw HdrdError(files.error());
+  progress("wrote {} files in {:.0f} ms", files->size(),
+           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  print_out(summary_text(*result, *files, o.common.json));
+}
+
+struct Spec {
+  const char* name;
+  int order;
+  job::Source source;
+  const char* description;
+  const char* footer;
+};
+
+constexpr Spec kRender{
+    "render", 15, job::Source::render, "Render a scene physically and encode it for a display mode",
+    "Examples:\n"
+    "  hdrd render --scene material-grid -o out/grid --mode hdr10 --peak 1000\n"
+    "  hdrd render --scene hdr -o out/hdr --format png,heatmap     (+ out/hdr.heatmap.png, display cd/m2)\n"
+    "  hdrd render --scene hdr -o out/hdr-sdr --mode sdr --tonemap aces-narkowicz --format png\n"
+    "  hdrd render --scene model.glb -o out/model --width 1280 --height 720 --camera 0,1.5,4:0,0.5,0:40\n"
+    "  hdrd render --scene furnace -o out/f --exposure-mode light --backend osmesa --json\n"
+    "Writes OUTBASE.png/.exr/.raw, OUTBASE.scene.exr (float32 linear Rec.709, absolute cd/m2) and the\n"
+    "sidecar OUTBASE.json. Every option is a request setting (docs/settings.md): POST /v1/render takes the\n"
+    "same ones with the same defaults. Scenes: docs/scene-format.md; shading: docs/rendering.md."};
+constexpr Spec kEncode{
+    "encode", 20, job::Source::encode, "Encode a scene-referred OpenEXR image for a display mode",
+    "Examples:\n"
+    "  hdrd encode Desk.exr -o out/desk --mode hdr10 --peak 1000\n"
+    "  hdrd encode Desk.exr -o out/desk --mode hdr10 --format png,heatmap   (+ out/desk.heatmap.png)\n"
+    "  hdrd encode Desk.exr -o out/desk-sdr --mode sdr --tonemap aces-narkowicz --exposure -1\n"
+    "  hdrd encode frame.exr -o out/f --mode hdr10 --tonemap clip --format png --json\n"
+    "  hdrd encode Desk.exr -o out/d --mode hlg --exposure-mode histogram --ui hud.png --ui-pos 16,16\n"
+    "Every dump gets OUTBASE.json describing exactly what is in it (docs/dump-format.md). Every option is a\n"
+    "request setting (docs/settings.md): POST /v1/encode takes the same ones with the same defaults."};
+constexpr Spec kPattern{
+    "pattern", 40, job::Source::pattern, "Write a standard HDR test pattern for a display mode",
+    "Examples:\n"
+    "  hdrd pattern bt2111 --mode hdr10 -o out/bars-pq        (ITU-R BT.2111-2, narrow range)\n"
+    "  hdrd pattern bt2111 --mode hlg -o out/bars-hlg\n"
+    "  hdrd pattern window --mode hdr10 --peak 1000 --level 1000 --area 10 -o out/win10\n"
+    "  hdrd pattern clipping --mode hdr10 --peak 10000 --level 1000 -o out/clip  (squares >= 1000 vanish)\n"
+    "  hdrd pattern pq-ramp --mode hdr10 --steps 21 -o out/ramp --format png --json\n"
+    "  hdrd pattern sdr-grey --mode hdr10 --sdr-white 203 -o out/sdr-grey\n"
+    "Patterns are display-referred: levels are cd/m2 on the display, encoded with the clip curve."};
+
+void setup(CLI::App& root, const Spec& spec) {
+  auto o = std::make_shared<FrameCommand>();
+  o->source = spec.source;
+  auto* app = root.add_subcommand(spec.name, spec.description);
+  if (spec.source == job::Source::encode)
+    app->add_option("input", o->input, "Input OpenEXR (relative: 1.0 = diffuse white; absolute with whiteLuminance)")
+        ->required();
+  if (spec.source == job::Source::pattern) {
+    app->add_option("name", o->pattern, "Pattern: bt2111, pq-ramp, window, near-black, clipping, sdr-grey");
+    app->add_flag("--list", o->list, "List the patterns");
+  }
+  app->add_option("-o,--output", o->outbase, "Output base path: OUTBASE.<format> for each format, and OUTBASE.json");
+  add_setting_options(*app, spec.source, job::Reach::cli, o->args);
+  add_common_options(*app, o->common);
+  app->footer(spec.footer);
+  app->callback([o] { run(*o); });
+}
+
+}  // namespace
+}  // namespace hdrd::cli
+
+HDRD_REGISTER_COMMAND("render", 15, [](CLI::App& root) { hdrd::cli::setup(root, hdrd::cli::kRender); })
+HDRD_REGISTER_COMMAND("encode", 20, [](CLI::App& root) { hdrd::cli::setup(root, hdrd::cli::kEncode); })
+HDRD_REGISTER_COMMAND("pattern", 40, [](CLI::App& root) { hdrd::cli::setup(root, hdrd::cli::kPattern); })
