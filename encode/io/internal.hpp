@@ -4,6 +4,9 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <span>
+#include <utility>
+#include <vector>
 
 #include "encode/frame.hpp"
 #include "encode/result.hpp"
@@ -67,5 +70,24 @@ inline std::uint16_t sample16(const EncodedFrame& f, int x, int y, int c) {
   const auto code = static_cast<std::uint32_t>(code_at(f, x, y, c));
   return narrow ? static_cast<std::uint16_t>(code << 6) : static_cast<std::uint16_t>((code * 65535u + 511u) / 1023u);
 }
+
+// ---- JPEG (libjpeg-turbo), shared by the SDR and gain-map JPEG writers ----
+
+// 8-bit interleaved samples: 3 components (R, G, B; stored as Y'CbCr) or 1 (grey).
+struct JpegSamples {
+  int width = 0, height = 0, components = 3;
+  std::span<const std::uint8_t> rows;  // height x width x components
+};
+struct JpegMarker {
+  int code = 0;  // 0xE1 APP1, 0xE2 APP2, ...
+  std::vector<std::uint8_t> payload;  // at most 65533 bytes
+};
+// A baseline JFIF JPEG; `markers` follow the JFIF APP0. 4:2:0 when `subsample`, else 4:4:4.
+Result<std::vector<std::uint8_t>> compress_jpeg(const JpegSamples& image, int quality, bool subsample,
+                                                const std::vector<JpegMarker>& markers = {});
+
+// The SDR frame's 8-bit sRGB samples as its JPEG holds them (sdr mode, srgb curve, full
+// range; 10-bit codes rounded to 8 bits).
+Result<std::vector<std::uint8_t>> sdr_samples(const EncodedFrame& sdr);
 
 }  // namespace hdrd::io::detail
