@@ -96,7 +96,9 @@ Result<void> configure(JxlEncoder* enc, const EncodedFrame& f, const JxlOptions&
   info.xsize = static_cast<std::uint32_t>(f.width);
   info.ysize = static_cast<std::uint32_t>(f.height);
   info.num_color_channels = 3;
-  info.bits_per_sample = sixteen ? (o.lossless ? 16 : 10) : 8;
+  // libjxl 0.7 reads UINT16 input as 0 .. 2^bits_per_sample - 1 (no JxlEncoderSetFrameBitDepth
+  // before 0.8): declaring 10 bits for 16-bit samples clips them. 16 keeps the PNG's precision.
+  info.bits_per_sample = sixteen ? 16 : 8;
   info.uses_original_profile = o.lossless ? JXL_TRUE : JXL_FALSE;  // lossless: no XYB
   info.intensity_target = static_cast<float>(f.target.peak_nits);
   info.min_nits = f.target.is_hdr() ? static_cast<float>(f.mastering.min_nits) : 0.0f;
