@@ -73,7 +73,7 @@ enum class GainMapChannels {
 struct GainMapOptions {
   JpegOptions primary;                  // the SDR rendition
   int gain_map_quality = 85;            // libjpeg quality of the gain map image (always 4:4:4)
-  int gain_map_scale = 2;               // the map is ceil(width / scale) x ceil(height / scale), 1..16
+  int gain_map_scale = 1;               // the map is ceil(width / scale) x ceil(height / scale), 1..16
   GainMapChannels channels = GainMapChannels::rgb;
   double gamma = 1.0;                   // map gamma, > 0 (ISO 21496-1 gain_map_gamma; hdrgm:Gamma)
   double offset_sdr = 1.0 / 64;         // k_sdr (baseOffset; hdrgm:OffsetSDR), >= 0
