@@ -120,12 +120,15 @@ LogGains log_gains(const EncodedFrame& sdr, std::span<const std::uint8_t> sdr_rg
           }
         const color::Vec3 a = sum_sdr * (1.0 / n), b = sum_hdr * (1.0 / n);
         float* out = &g.log2_gain[(static_cast<std::size_t>(my) * g.width + mx) * g.channels];
+        // Float log2: the map resolves (max - min) / 255, ~0.01; float's error is ~1e-7.
+        const auto log_ratio = [&](double hdr_v, double sdr_v) {
+          return std::log2(static_cast<float>((hdr_v + o.offset_hdr) / (sdr_v + o.offset_sdr)));
+        };
         if (g.channels == 1) {
-          out[0] = static_cast<float>(std::log2((color::dot(color::kRec709Luma, b) + o.offset_hdr) /
-                                                (color::dot(color::kRec709Luma, a) + o.offset_sdr)));
+          out[0] = log_ratio(color::dot(color::kRec709Luma, b), color::dot(color::kRec709Luma, a));
           continue;
         }
-        for (int c = 0; c < 3; ++c) out[c] = static_cast<float>(std::log2((b[c] + o.offset_hdr) / (a[c] + o.offset_sdr)));
+        for (int c = 0; c < 3; ++c) out[c] = log_ratio(b[c], a[c]);
       }
   });
   return g;
@@ -158,11 +161,12 @@ GainMapMetadata metadata_for(const LogGains& g, const EncodedFrame& hdr, const G
 
 }  // namespace
 
-Result<GainMap> compute_gain_map(const EncodedFrame& sdr, const EncodedFrame& hdr, const GainMapOptions& options) {
-  auto sdr_rgb = detail::sdr_samples(sdr);
-  if (!sdr_rgb) return sdr_rgb.error();
+namespace detail {
+
+Result<GainMap> gain_map_of(const EncodedFrame& sdr, std::span<const std::uint8_t> sdr_rgb, const EncodedFrame& hdr,
+                            const GainMapOptions& options) {
   if (auto ok = check_inputs(sdr, hdr, options); !ok) return ok.error();
-  const LogGains g = log_gains(sdr, *sdr_rgb, hdr, options);
+  const LogGains g = log_gains(sdr, sdr_rgb, hdr, options);
   GainMap map;
   map.width = g.width;
   map.height = g.height;
@@ -174,9 +178,17 @@ Result<GainMap> compute_gain_map(const EncodedFrame& sdr, const EncodedFrame& hd
     const auto c = i % static_cast<std::size_t>(g.channels);
     const double lo = m.gain_map_min_log2[c], hi = m.gain_map_max_log2[c];
     const double t = std::clamp((g.log2_gain[i] - lo) / (hi - lo), 0.0, 1.0);
-    map.samples[i] = static_cast<std::uint8_t>(std::lround((m.gamma == 1.0 ? t : std::pow(t, m.gamma)) * 255.0));
+    map.samples[i] = static_cast<std::uint8_t>((m.gamma == 1.0 ? t : std::pow(t, m.gamma)) * 255.0 + 0.5);  // t >= 0
   }
   return map;
+}
+
+}  // namespace detail
+
+Result<GainMap> compute_gain_map(const EncodedFrame& sdr, const EncodedFrame& hdr, const GainMapOptions& options) {
+  auto sdr_rgb = detail::sdr_samples(sdr);
+  if (!sdr_rgb) return sdr_rgb.error();
+  return detail::gain_map_of(sdr, *sdr_rgb, hdr, options);
 }
 
 }  // namespace hdrd::io

@@ -91,3 +91,16 @@ Result<std::vector<std::uint8_t>> compress_jpeg(const JpegSamples& image, int qu
 Result<std::vector<std::uint8_t>> sdr_samples(const EncodedFrame& sdr);
 
 }  // namespace hdrd::io::detail
+
+namespace hdrd::io {
+struct GainMap;
+struct GainMapOptions;
+}  // namespace hdrd::io
+
+namespace hdrd::io::detail {
+
+// compute_gain_map on the SDR frame's samples already taken (sdr_samples).
+Result<GainMap> gain_map_of(const EncodedFrame& sdr, std::span<const std::uint8_t> sdr_rgb, const EncodedFrame& hdr,
+                            const GainMapOptions& options);
+
+}  // namespace hdrd::io::detail

@@ -106,13 +106,17 @@ Result<std::vector<std::uint8_t>> sdr_samples(const EncodedFrame& f) {
   if (auto ok = detail::check_frame(f); !ok) return ok.error();
   const bool ten = f.drm_fourcc != kDrmFormatXrgb8888;
   std::vector<std::uint8_t> rgb(static_cast<std::size_t>(f.width) * f.height * 3);
-  std::size_t i = 0;
-  for (int y = 0; y < f.height; ++y)
-    for (int x = 0; x < f.width; ++x)
-      for (int c = 0; c < 3; ++c, ++i) {
-        const int code = detail::code_at(f, x, y, c);
-        rgb[i] = static_cast<std::uint8_t>(ten ? (code * 255 + 511) / 1023 : code);
+  for (int y = 0; y < f.height; ++y) {
+    const std::uint8_t* src = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes;
+    std::uint8_t* out = rgb.data() + static_cast<std::size_t>(y) * f.width * 3;
+    for (int x = 0; x < f.width; ++x, src += 4, out += 3) {
+      if (!ten) {  // XRGB8888: bytes B, G, R, X
+        out[0] = src[2], out[1] = src[1], out[2] = src[0];
+        continue;
       }
+      for (int c = 0; c < 3; ++c) out[c] = static_cast<std::uint8_t>((detail::code_at(f, x, y, c) * 255 + 511) / 1023);
+    }
+  }
   return rgb;
 }
 

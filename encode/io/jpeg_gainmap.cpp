@@ -179,10 +179,10 @@ Result<Bytes> assemble(const Bytes& primary, const Bytes& gain_map) {
 
 Result<GainMapJpeg> encode_jpeg_gainmap(const EncodedFrame& sdr, const EncodedFrame& hdr,
                                         const GainMapOptions& options) {
-  auto map = compute_gain_map(sdr, hdr, options);
-  if (!map) return map.error();
   auto sdr_rgb = detail::sdr_samples(sdr);
   if (!sdr_rgb) return sdr_rgb.error();
+  auto map = detail::gain_map_of(sdr, *sdr_rgb, hdr, options);
+  if (!map) return map.error();
   auto primary = detail::compress_jpeg({sdr.width, sdr.height, 3, *sdr_rgb}, options.primary.quality,
                                        options.primary.subsample_chroma);
   if (!primary) return primary.error();
