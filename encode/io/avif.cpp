@@ -63,6 +63,9 @@ Result<AvifPlan> plan_for(const EncodedFrame& frame, const AvifOptions& o) {
     return option_error(fmt::format("lossless AVIF keeps the frame's {}-bit codes; {} bits would requantise them",
                                     eight_bit_frame ? 8 : 10, p.bits),
                         "avif.bits");
+  if (o.lossless && p.range != frame.target.range)
+    return option_error("lossless AVIF keeps the frame's range; another range would requantise its codes",
+                        "avif.range");
   if (!o.lossless && (o.quality < 0 || o.quality > 100))
     return option_error(fmt::format("AVIF quality {} is outside 0..100", o.quality), "avif.quality");
   if (o.speed < 0 || o.speed > 9) return option_error(fmt::format("AVIF speed {} is outside 0..9", o.speed), "avif.speed");

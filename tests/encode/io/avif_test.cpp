@@ -289,6 +289,10 @@ TEST(AvifErrors, NameWhatIsWrong) {
   o.bits = 12;
   expect_error(hdr, o, "avif.options", "avif.bits");
   o = {};
+  o.lossless = true;
+  o.range = Range::narrow;
+  expect_error(hdr, o, "avif.options", "avif.range");
+  o = {};
   o.quality = 101;
   expect_error(hdr, o, "avif.options", "avif.quality");
   o = {};
