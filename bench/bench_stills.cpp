@@ -4,7 +4,7 @@
 // 3840x2160 and encoded as hdr10 and sdr with the modes' defaults; each case is timed `rounds`
 // times, the cases alternating within a round, and the median is reported.
 //
-//   bench_stills [--rounds N] [--threads N] [--exr PATH]
+//   bench_stills [--rounds N] [--threads N] [--exr PATH] [--only SUBSTRING]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -75,12 +75,14 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   int rounds = 3, threads = 2;
+  std::string only;  // run the cases whose name contains this
   std::string exr_path = std::string(HDRD_SHARED_DIR_DEFAULT) + "/fixtures/exr/MtTamWest.exr";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--rounds") rounds = std::atoi(argv[i + 1]);
     else if (a == "--threads") threads = std::atoi(argv[i + 1]);
     else if (a == "--exr") exr_path = argv[i + 1];
+    else if (a == "--only") only = argv[i + 1];
   }
   auto exr = io::read_exr(exr_path);
   if (!exr) {
@@ -103,6 +105,11 @@ int main(int argc, char** argv) {
   avif.threads = threads;
   io::AvifOptions avif_lossless = avif;
   avif_lossless.lossless = true;
+  avif_lossless.speed = 7;  // the lossy default, for comparison; the lossless default is 9
+  io::AvifOptions avif_fast = avif;
+  avif_fast.speed = 9;
+  io::AvifOptions avif_lossless_fast = avif_lossless;
+  avif_lossless_fast.speed = 9;
   io::AvifOptions avif_444 = avif;
   avif_444.chroma = io::ChromaSubsampling::yuv444;
   io::JxlOptions jxl;
@@ -124,7 +131,9 @@ int main(int argc, char** argv) {
       {"png (hdr10, 16-bit, the peer)", [&] { return size_of(io::encode_png(hdr)); }},
       {"avif q80 4:2:0 10-bit (default)", [&] { return size_of(io::encode_avif(hdr, avif)); }},
       {"avif q80 4:4:4 10-bit", [&] { return size_of(io::encode_avif(hdr, avif_444)); }},
-      {"avif lossless (rgb, 10-bit)", [&] { return size_of(io::encode_avif(hdr, avif_lossless)); }},
+      {"avif q80 4:2:0 10-bit speed 9", [&] { return size_of(io::encode_avif(hdr, avif_fast)); }},
+      {"avif lossless (rgb, 10-bit) speed 7", [&] { return size_of(io::encode_avif(hdr, avif_lossless)); }},
+      {"avif lossless (rgb, 10-bit) speed 9 (default)", [&] { return size_of(io::encode_avif(hdr, avif_lossless_fast)); }},
       {"jxl q90 (distance 1, effort 3, default)", [&] { return size_of(io::encode_jxl(hdr, jxl)); }},
       {"jxl lossless (16-bit, effort 3)", [&] { return size_of(io::encode_jxl(hdr, jxl_lossless)); }},
       {"jpeg sdr q90 (no gain map)", [&] { return size_of(io::encode_jpeg(sdr)); }},
@@ -132,6 +141,8 @@ int main(int argc, char** argv) {
       {"jpeg-gainmap rgb scale 2", [&] { return gain(gm2); }},
       {"jpeg-gainmap luminance scale 4", [&] { return gain(gm4_lum); }},
   };
+  if (!only.empty())
+    std::erase_if(cases, [&](const Case& c) { return c.name.find(only) == std::string::npos && c.name.find("png") != 0; });
   for (int r = 0; r < rounds; ++r)
     for (Case& c : cases) {
       const auto a = Clock::now();

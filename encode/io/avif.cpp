@@ -37,6 +37,7 @@ struct AvifPlan {
   Range range = Range::full;
   AvifMatrix matrix = AvifMatrix::ycbcr;
   ChromaSubsampling chroma = ChromaSubsampling::yuv420;
+  int speed = 7;
 };
 
 Error option_error(std::string message, std::string field) {
@@ -68,7 +69,8 @@ Result<AvifPlan> plan_for(const EncodedFrame& frame, const AvifOptions& o) {
                         "avif.range");
   if (!o.lossless && (o.quality < 0 || o.quality > 100))
     return option_error(fmt::format("AVIF quality {} is outside 0..100", o.quality), "avif.quality");
-  if (o.speed < 0 || o.speed > 9) return option_error(fmt::format("AVIF speed {} is outside 0..9", o.speed), "avif.speed");
+  p.speed = o.speed.value_or(o.lossless ? 9 : 7);
+  if (p.speed < 0 || p.speed > 9) return option_error(fmt::format("AVIF speed {} is outside 0..9", p.speed), "avif.speed");
   if (o.threads < 0) return option_error("AVIF threads must be >= 0", "avif.threads");
   return p;
 }
@@ -155,12 +157,12 @@ std::vector<std::vector<std::uint8_t>> hdr_properties(const EncodedFrame& f) {
   return {detail::make_box("clli", clli), detail::make_box("mdcv", mdcv)};
 }
 
-std::unique_ptr<avifEncoder, AvifEncoderDeleter> make_encoder(const AvifOptions& o) {
+std::unique_ptr<avifEncoder, AvifEncoderDeleter> make_encoder(const AvifOptions& o, const AvifPlan& p) {
   std::unique_ptr<avifEncoder, AvifEncoderDeleter> enc(avifEncoderCreate());
   if (!enc) return enc;
   enc->codecChoice = AVIF_CODEC_CHOICE_AOM;
   enc->maxThreads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  enc->speed = o.speed;
+  enc->speed = p.speed;
   enc->autoTiling = AVIF_TRUE;  // tiles let aom's threads share a 4K frame
   const int q = o.lossless ? AVIF_QUANTIZER_LOSSLESS : quantizer_for(o.quality);
   enc->minQuantizer = enc->maxQuantizer = q;
@@ -190,7 +192,7 @@ Result<std::vector<std::uint8_t>> encode_avif(const EncodedFrame& frame, const A
   } else if (auto ok = fill_ycbcr(frame, *img); !ok) {
     return ok.error();
   }
-  auto enc = make_encoder(options);
+  auto enc = make_encoder(options, *plan);
   if (!enc) return make_error("avif.encode", "libavif cannot create an encoder");
   RwData out;
   if (const avifResult r = avifEncoderWrite(enc.get(), img.get(), &out.d); r != AVIF_RESULT_OK)

@@ -31,7 +31,9 @@ struct AvifOptions {
   std::optional<Range> range;              // empty: the frame's range
   std::optional<AvifMatrix> matrix;        // empty: rgb when lossless, else ycbcr
   std::optional<ChromaSubsampling> chroma;  // empty: 4:4:4 when lossless or rgb, else 4:2:0
-  int speed = 7;                           // libaom speed 0 (slowest) .. 9 (fastest)
+  // libaom speed 0 (slowest) .. 9 (fastest). Empty: 9 when lossless (the samples are the same at
+  // every speed; at 4K 9 is 6.5x faster than 7 for 3.7 % more bytes), else 7.
+  std::optional<int> speed;
   int threads = 0;                         // 0: all hardware threads (libaom caps at 16)
 };
 Result<std::vector<std::uint8_t>> encode_avif(const EncodedFrame& frame, const AvifOptions& options = {});
