@@ -16,7 +16,7 @@ packages=(
   edid-decode
   libavif-dev libjxl-dev libjpeg62-turbo-dev
   # decoders the stills tests read the files back with (they skip without them)
-  libavif-bin libjxl-tools libjpeg-turbo-progs ffmpeg libimage-exiftool-perl
+  libavif-bin libheif-examples libjxl-tools libjpeg-turbo-progs ffmpeg libimage-exiftool-perl
 )
 
 missing=()
