@@ -22,6 +22,13 @@ pkg_check_modules(OSMESA REQUIRED IMPORTED_TARGET osmesa)
 pkg_check_modules(LIBDRM REQUIRED IMPORTED_TARGET libdrm)
 find_package(TinyGLTF CONFIG REQUIRED)
 
+# Shareable HDR stills (encode/io/stills.hpp): libavif 0.11 (with libaom) for AVIF, libjxl 0.7
+# for JPEG XL, libjpeg-turbo for the SDR and gain-map JPEGs. Debian's CMake configs for these
+# are missing or partial; their .pc files are complete.
+pkg_check_modules(AVIF REQUIRED IMPORTED_TARGET libavif>=0.11)
+pkg_check_modules(JXL REQUIRED IMPORTED_TARGET libjxl>=0.7 libjxl_threads>=0.7)
+pkg_check_modules(JPEG REQUIRED IMPORTED_TARGET libjpeg)
+
 pkg_check_modules(MHD REQUIRED IMPORTED_TARGET libmicrohttpd)
 find_package(tomlplusplus CONFIG REQUIRED)
 

@@ -14,6 +14,9 @@ packages=(
   libmicrohttpd-dev libtomlplusplus-dev libhwy-dev libzimg-dev
   clang-14 libclang-rt-14-dev
   edid-decode
+  libavif-dev libjxl-dev libjpeg62-turbo-dev
+  # decoders the stills tests read the files back with (they skip without them)
+  libavif-bin libheif-examples libjxl-tools libjpeg-turbo-progs ffmpeg libimage-exiftool-perl
 )
 
 missing=()

@@ -50,52 +50,30 @@ void put_u32(std::vector<std::uint8_t>& v, std::uint32_t x) {
   put_u16(v, x & 0xffff);
 }
 
-std::uint32_t to_units(double value, double unit, double max, bool round_up) {
-  if (!(value > 0)) return 0;  // also NaN
-  const double units = value / unit;
-  // Round up so the container never states less than was measured (REFERENCE.md §6);
-  // the small slack keeps exact values such as 123.45 cd/m2 from rounding to the next unit.
-  const double r = round_up ? std::ceil(units - 1e-6) : std::round(units);
-  return static_cast<std::uint32_t>(std::min(r, max));
-}
-
-// H.273 code points. SDR: 13 = IEC 61966-2-1 sRGB; 4 = BT.470 System M, "assumed display
-// gamma 2.2"; 1 = BT.709, whose reference display EOTF is BT.1886 (H.273 Table 3 note).
-std::array<std::uint8_t, 4> cicp_for(const DisplayTarget& t) {
-  std::uint8_t primaries = 1, transfer = 13;
-  switch (t.mode) {
-    case Mode::hdr10: primaries = 9; transfer = 16; break;
-    case Mode::hlg: primaries = 9; transfer = 18; break;
-    case Mode::sdr: transfer = t.sdr_curve == SdrCurve::srgb ? 13 : 4; break;
-    case Mode::sdr_bt1886: transfer = 1; break;
-    case Mode::scrgb: break;  // no PNG form; rejected before this
-  }
-  return {primaries, transfer, 0, static_cast<std::uint8_t>(t.range == Range::full ? 1 : 0)};
+std::vector<std::uint8_t> cicp_for(const DisplayTarget& t) {
+  const detail::Cicp c = detail::cicp_for(t);
+  return {c.primaries, c.transfer, c.matrix, static_cast<std::uint8_t>(c.full_range ? 1 : 0)};
 }
 
 // mDCV: R, G, B and white x,y as u16 in 0.00002, then max and min luminance as u32 in 0.0001 cd/m2.
 std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
+  const detail::St2086Units u = detail::st2086_units(m);
   std::vector<std::uint8_t> v;
-  for (color::Chromaticity c : {m.primaries.red, m.primaries.green, m.primaries.blue, m.primaries.white}) {
-    put_u16(v, to_units(c.x, 0.00002, 65535, false));
-    put_u16(v, to_units(c.y, 0.00002, 65535, false));
+  for (const auto& xy : {u.red, u.green, u.blue, u.white}) {
+    put_u16(v, xy[0]);
+    put_u16(v, xy[1]);
   }
-  put_u32(v, to_units(m.max_nits, 0.0001, 4294967295.0, false));
-  put_u32(v, to_units(m.min_nits, 0.0001, 4294967295.0, false));
+  put_u32(v, u.max_luminance);
+  put_u32(v, u.min_luminance);
   return v;
 }
 
-// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up. 0 means "unknown" and some
-// displays misbehave on it, so a value that would be 0 becomes the mastering peak
-// (REFERENCE.md §6), as in the KMS metadata blob (display/hdr_metadata.cpp).
+// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up, 0 replaced by the mastering
+// peak, as in the KMS metadata blob (display/hdr_metadata.cpp).
 std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
-  auto carried = [&](double nits) {
-    const auto units = to_units(nits, 0.0001, 4294967295.0, true);
-    return units != 0 ? units : to_units(m.max_nits, 0.0001, 4294967295.0, true);
-  };
-  put_u32(v, carried(l.max_cll_nits));
-  put_u32(v, carried(l.max_fall_nits));
+  put_u32(v, detail::carried_light(l.max_cll_nits, 0.0001, 4294967295.0, m));
+  put_u32(v, detail::carried_light(l.max_fall_nits, 0.0001, 4294967295.0, m));
   return v;
 }
 
@@ -104,7 +82,6 @@ std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDi
 struct RowSource {
   const EncodedFrame* frame = nullptr;
   bool sixteen = false;
-  bool narrow = false;
 
   void fill(int y, std::uint8_t* row) const {
     const auto& f = *frame;
@@ -117,32 +94,19 @@ struct RowSource {
         continue;
       }
       for (int c = 0; c < 3; ++c) {
-        const std::uint16_t s = sample16(src, y, x, c);
+        const std::uint16_t s = detail::sample16(f, x, y, c);
         row[x * 6 + c * 2] = static_cast<std::uint8_t>(s >> 8);
         row[x * 6 + c * 2 + 1] = static_cast<std::uint8_t>(s);
       }
     }
   }
 
-  // Full range: round(E' * 65535) from signal16 when the encoder kept it, else from the
-  // 10-bit code as round(D * 65535 / 1023). Narrow range: the 16-bit narrow code of
-  // BT.2100 Table 9, round((219 E' + 16) * 2^8), which for a 10-bit narrow code D is
-  // exactly D * 2^6; taken from the code so it never depends on how signal16 was scaled.
-  std::uint16_t sample16(const std::uint8_t* src, int y, int x, int c) const {
-    const auto& f = *frame;
-    if (!narrow && !f.signal16.empty()) return f.signal16[(static_cast<std::size_t>(y) * f.width + x) * 3 + c];
-    std::uint32_t word;
-    std::memcpy(&word, src + x * 4, 4);  // little-endian host (x86-64, arm64)
-    const std::uint32_t code = (word >> (10 * c)) & 0x3ff;
-    return narrow ? static_cast<std::uint16_t>(code << 6)
-                  : static_cast<std::uint16_t>((code * 65535u + 511u) / 1023u);
-  }
 };
 
 struct PngWriteJob {
   int width = 0, height = 0, bit_depth = 8;
   RowSource rows;
-  std::array<std::uint8_t, 4> cicp{};
+  std::vector<std::uint8_t> cicp;
   std::vector<std::uint8_t> mdcv, clli;  // empty = not written
   enum class Legacy { none, srgb, gamma22, bt1886 } legacy = Legacy::none;
   std::vector<std::uint8_t> row;
@@ -237,7 +201,6 @@ Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame) {
   job.height = frame.height;
   job.rows.frame = &frame;
   job.rows.sixteen = frame.drm_fourcc != kDrmFormatXrgb8888;
-  job.rows.narrow = frame.target.range == Range::narrow;
   job.bit_depth = job.rows.sixteen ? 16 : 8;
   job.cicp = cicp_for(frame.target);
   const Mode mode = frame.target.mode;
