@@ -23,6 +23,9 @@ pkg_check_modules(LIBDRM REQUIRED IMPORTED_TARGET libdrm)
 find_package(TinyGLTF CONFIG REQUIRED)
 
 pkg_check_modules(MHD REQUIRED IMPORTED_TARGET libmicrohttpd)
+
+# Video (encode/video): FFmpeg 5.1's libraries with Debian's x265, SVT-AV1, libaom, x264.
+pkg_check_modules(LIBAV REQUIRED IMPORTED_TARGET libavcodec libavformat libavutil)
 find_package(tomlplusplus CONFIG REQUIRED)
 
 if(HDRD_BUILD_TESTS)

@@ -14,6 +14,7 @@ packages=(
   libmicrohttpd-dev libtomlplusplus-dev libhwy-dev libzimg-dev
   clang-14 libclang-rt-14-dev
   edid-decode
+  libavcodec-dev libavformat-dev libavutil-dev ffmpeg
 )
 
 missing=()

@@ -14,6 +14,7 @@
 
 #include "encode/io/io.hpp"
 #include "encode/io/internal.hpp"
+#include "encode/io/signal_metadata.hpp"
 
 namespace hdrd::io {
 namespace fs = std::filesystem;
@@ -50,38 +51,23 @@ void put_u32(std::vector<std::uint8_t>& v, std::uint32_t x) {
   put_u16(v, x & 0xffff);
 }
 
-std::uint32_t to_units(double value, double unit, double max, bool round_up) {
-  if (!(value > 0)) return 0;  // also NaN
-  const double units = value / unit;
-  // Round up so the container never states less than was measured (REFERENCE.md §6);
-  // the small slack keeps exact values such as 123.45 cd/m2 from rounding to the next unit.
-  const double r = round_up ? std::ceil(units - 1e-6) : std::round(units);
-  return static_cast<std::uint32_t>(std::min(r, max));
-}
-
-// H.273 code points. SDR: 13 = IEC 61966-2-1 sRGB; 4 = BT.470 System M, "assumed display
-// gamma 2.2"; 1 = BT.709, whose reference display EOTF is BT.1886 (H.273 Table 3 note).
+// PNG 3rd edition §11.3.2.6: primaries, transfer, matrix 0 (RGB), full-range flag.
 std::array<std::uint8_t, 4> cicp_for(const DisplayTarget& t) {
-  std::uint8_t primaries = 1, transfer = 13;
-  switch (t.mode) {
-    case Mode::hdr10: primaries = 9; transfer = 16; break;
-    case Mode::hlg: primaries = 9; transfer = 18; break;
-    case Mode::sdr: transfer = t.sdr_curve == SdrCurve::srgb ? 13 : 4; break;
-    case Mode::sdr_bt1886: transfer = 1; break;
-    case Mode::scrgb: break;  // no PNG form; rejected before this
-  }
-  return {primaries, transfer, 0, static_cast<std::uint8_t>(t.range == Range::full ? 1 : 0)};
+  const H273 h = h273_for(t);
+  return {h.colour_primaries, h.transfer_characteristics, kH273MatrixIdentity,
+          static_cast<std::uint8_t>(t.range == Range::full ? 1 : 0)};
 }
 
 // mDCV: R, G, B and white x,y as u16 in 0.00002, then max and min luminance as u32 in 0.0001 cd/m2.
 std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
+  const St2086Codes c = st2086_codes(m);
   std::vector<std::uint8_t> v;
-  for (color::Chromaticity c : {m.primaries.red, m.primaries.green, m.primaries.blue, m.primaries.white}) {
-    put_u16(v, to_units(c.x, 0.00002, 65535, false));
-    put_u16(v, to_units(c.y, 0.00002, 65535, false));
+  for (const auto& xy : {c.red, c.green, c.blue, c.white}) {
+    put_u16(v, xy[0]);
+    put_u16(v, xy[1]);
   }
-  put_u32(v, to_units(m.max_nits, 0.0001, 4294967295.0, false));
-  put_u32(v, to_units(m.min_nits, 0.0001, 4294967295.0, false));
+  put_u32(v, c.max_luminance);
+  put_u32(v, c.min_luminance);
   return v;
 }
 
