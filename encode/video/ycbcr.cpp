@@ -39,12 +39,14 @@ namespace {
 // Every step is linear in the codes c of the frame's own range, E' = a c + b:
 //   Y code  = y_scale * (Kr cR + Kg cG + Kb cB) + y_offset
 //   Cb code = cb_scale * (F_B - (Kr F_R + Kg F_G + Kb F_B)) + c_offset, F = 8 x the filtered code
-// with the rounding's +0.5 folded into the offsets (the kernel truncates, then clamps,
-// which equals clamping floor() for every value).
+// with the rounding's +0.5 folded into the offsets (the kernels truncate, then clamp,
+// which equals clamping floor() for every value). Single precision: within 3e-4 of a code
+// of the double-precision equations, so a code differs from them only where they sit
+// within that of a rounding tie.
 struct Coeffs {
-  double kr, kg, kb;
-  double y_scale, y_offset;
-  double cb_scale, cr_scale, c_offset;
+  float kr, kg, kb;
+  float y_scale, y_offset;
+  float cb_scale, cr_scale, c_offset;
   int max_code;
 };
 
@@ -59,50 +61,84 @@ Coeffs coeffs_for(const YcbcrFormat& f, Range input_range) {
   const double oy = f.range == Range::narrow ? 16.0 * q : 0.0;
   const double sc = f.range == Range::narrow ? 224.0 * q : std::ldexp(1.0, n) - 1;
   const double oc = f.range == Range::narrow ? 128.0 * q : std::ldexp(1.0, n - 1);
+  const double kr = f.luma.x, kg = f.luma.y, kb = f.luma.z;
   Coeffs c;
-  c.kr = f.luma.x, c.kg = f.luma.y, c.kb = f.luma.z;
-  c.y_scale = sy * a;
-  c.y_offset = sy * b * (c.kr + c.kg + c.kb) + oy + 0.5;
-  c.cb_scale = sc * a / (8.0 * 2.0 * (1.0 - c.kb));
-  c.cr_scale = sc * a / (8.0 * 2.0 * (1.0 - c.kr));
-  c.c_offset = oc + 0.5;
+  c.kr = static_cast<float>(kr), c.kg = static_cast<float>(kg), c.kb = static_cast<float>(kb);
+  c.y_scale = static_cast<float>(sy * a);
+  c.y_offset = static_cast<float>(sy * b * (kr + kg + kb) + oy + 0.5);
+  c.cb_scale = static_cast<float>(sc * a / (8.0 * 2.0 * (1.0 - kb)));
+  c.cr_scale = static_cast<float>(sc * a / (8.0 * 2.0 * (1.0 - kr)));
+  c.c_offset = static_cast<float>(oc + 0.5);
   c.max_code = (1 << n) - 1;
   return c;
 }
 
-inline int quantise(double v, int max_code) { return std::clamp(static_cast<int>(v), 0, max_code); }
+// The row kernels are plain loops over contiguous arrays that GCC vectorises; each is
+// compiled for AVX2 and for the baseline, chosen at load time (target_clones), as
+// Highway's dynamic dispatch does for encode/kernel.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define HDRD_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define HDRD_ROW_KERNEL
+#endif
 
-// One row of packed codes -> three planar int rows.
-void unpack_row(const std::uint8_t* src, int width, bool ten_bit, int* r, int* g, int* b) {
+inline float channel(std::uint32_t w, bool ten_bit, int c) {
+  // XBGR2101010: R in bits 0-9; XRGB8888: bytes B, G, R, X.
+  if (ten_bit) return static_cast<float>((w >> (10 * c)) & 1023);
+  return static_cast<float>((w >> (16 - 8 * c)) & 255);
+}
+
+template <class T>
+inline T quantise(float v, int max_code) {
+  return static_cast<T>(std::clamp(static_cast<int>(v), 0, max_code));
+}
+
+// Luma of one packed row; the row's R, G, B added into the column sums s (row 2j + 2j+1).
+template <class T, bool kTen>
+inline void luma_and_sums(const Coeffs& c, const std::uint32_t* __restrict src, int width, T* __restrict out,
+                          float* __restrict sr, float* __restrict sg, float* __restrict sb, bool first_row) {
   for (int x = 0; x < width; ++x) {
-    std::uint32_t w;
-    std::memcpy(&w, src + static_cast<std::size_t>(x) * 4, 4);
-    if (ten_bit) {  // XBGR2101010: R in bits 0-9
-      r[x] = static_cast<int>(w & 1023), g[x] = static_cast<int>((w >> 10) & 1023), b[x] = static_cast<int>((w >> 20) & 1023);
-    } else {  // XRGB8888: bytes B, G, R, X
-      b[x] = static_cast<int>(w & 255), g[x] = static_cast<int>((w >> 8) & 255), r[x] = static_cast<int>((w >> 16) & 255);
-    }
+    const std::uint32_t w = src[x];
+    const float r = channel(w, kTen, 0), g = channel(w, kTen, 1), b = channel(w, kTen, 2);
+    out[x] = quantise<T>(c.y_scale * (c.kr * r + c.kg * g + c.kb * b) + c.y_offset, c.max_code);
+    sr[x] = first_row ? r : sr[x] + r;
+    sg[x] = first_row ? g : sg[x] + g;
+    sb[x] = first_row ? b : sb[x] + b;
   }
 }
 
+// [1 2 1] across columns (edges replicated) into h, then chroma at the even columns.
 template <class T>
-void luma_row(const Coeffs& c, const int* r, const int* g, const int* b, int width, T* out) {
-  for (int x = 0; x < width; ++x)
-    out[x] = static_cast<T>(quantise(c.y_scale * (c.kr * r[x] + c.kg * g[x] + c.kb * b[x]) + c.y_offset, c.max_code));
-}
-
-// Chroma of one row pair from the column sums s = row 2j + row 2j+1.
-template <class T>
-void chroma_row(const Coeffs& c, const int* sr, const int* sg, const int* sb, int width, T* cb, T* cr) {
+inline void chroma_row(const Coeffs& c, const float* __restrict sr, const float* __restrict sg,
+                       const float* __restrict sb, int width, float* __restrict hr, float* __restrict hg,
+                       float* __restrict hb, T* __restrict cb, T* __restrict cr) {
+  for (int x = 1; x < width - 1; ++x) {
+    hr[x] = sr[x - 1] + 2 * sr[x] + sr[x + 1];
+    hg[x] = sg[x - 1] + 2 * sg[x] + sg[x + 1];
+    hb[x] = sb[x - 1] + 2 * sb[x] + sb[x + 1];
+  }
+  hr[0] = 3 * sr[0] + sr[1], hg[0] = 3 * sg[0] + sg[1], hb[0] = 3 * sb[0] + sb[1];
   for (int i = 0; i < width / 2; ++i) {
-    const int x = 2 * i, l = x > 0 ? x - 1 : 0;
-    const double fr = sr[l] + 2 * sr[x] + sr[x + 1];
-    const double fg = sg[l] + 2 * sg[x] + sg[x + 1];
-    const double fb = sb[l] + 2 * sb[x] + sb[x + 1];
-    const double fy = c.kr * fr + c.kg * fg + c.kb * fb;
-    cb[i] = static_cast<T>(quantise(c.cb_scale * (fb - fy) + c.c_offset, c.max_code));
-    cr[i] = static_cast<T>(quantise(c.cr_scale * (fr - fy) + c.c_offset, c.max_code));
+    const float fr = hr[2 * i], fg = hg[2 * i], fb = hb[2 * i];
+    const float fy = c.kr * fr + c.kg * fg + c.kb * fb;
+    cb[i] = quantise<T>(c.cb_scale * (fb - fy) + c.c_offset, c.max_code);
+    cr[i] = quantise<T>(c.cr_scale * (fr - fy) + c.c_offset, c.max_code);
   }
+}
+
+HDRD_ROW_KERNEL void luma_row_10(const Coeffs& c, const std::uint32_t* src, int w, std::uint16_t* out, float* sr, float* sg,
+                                 float* sb, bool first) {
+  luma_and_sums<std::uint16_t, true>(c, src, w, out, sr, sg, sb, first);
+}
+HDRD_ROW_KERNEL void luma_row_8(const Coeffs& c, const std::uint32_t* src, int w, std::uint8_t* out, float* sr, float* sg,
+                                float* sb, bool first) {
+  luma_and_sums<std::uint8_t, false>(c, src, w, out, sr, sg, sb, first);
+}
+HDRD_ROW_KERNEL void chroma_row_10(const Coeffs& c, const float* s, int w, float* h, std::uint16_t* cb, std::uint16_t* cr) {
+  chroma_row<std::uint16_t>(c, s, s + w, s + 2 * w, w, h, h + w, h + 2 * w, cb, cr);
+}
+HDRD_ROW_KERNEL void chroma_row_8(const Coeffs& c, const float* s, int w, float* h, std::uint8_t* cb, std::uint8_t* cr) {
+  chroma_row<std::uint8_t>(c, s, s + w, s + 2 * w, w, h, h + w, h + 2 * w, cb, cr);
 }
 
 template <class T>
@@ -113,18 +149,21 @@ T* row_of(const Plane& p, int y) {
 template <class T>
 void convert(const EncodedFrame& f, const Coeffs& c, const Planes420& out) {
   const int w = f.width;
-  std::vector<int> buf(static_cast<std::size_t>(w) * 9);
-  int *r0 = buf.data(), *g0 = r0 + w, *b0 = g0 + w, *r1 = b0 + w, *g1 = r1 + w, *b1 = g1 + w;
-  int *sr = b1 + w, *sg = sr + w, *sb = sg + w;
-  const bool ten = f.drm_fourcc == kDrmFormatXbgr2101010;
-  for (int j = 0; j < f.height / 2; ++j) {
-    const std::uint8_t* top = f.data.data() + static_cast<std::size_t>(2 * j) * f.stride_bytes;
-    unpack_row(top, w, ten, r0, g0, b0);
-    unpack_row(top + f.stride_bytes, w, ten, r1, g1, b1);
-    luma_row(c, r0, g0, b0, w, row_of<T>(out.y, 2 * j));
-    luma_row(c, r1, g1, b1, w, row_of<T>(out.y, 2 * j + 1));
-    for (int x = 0; x < w; ++x) sr[x] = r0[x] + r1[x], sg[x] = g0[x] + g1[x], sb[x] = b0[x] + b1[x];
-    chroma_row(c, sr, sg, sb, w, row_of<T>(out.cb, j), row_of<T>(out.cr, j));
+  std::vector<float> buf(static_cast<std::size_t>(w) * 6);  // column sums R, G, B; filtered R, G, B
+  std::vector<std::uint32_t> words(static_cast<std::size_t>(w));
+  float *sums = buf.data(), *filtered = buf.data() + 3 * w;
+  for (int y = 0; y < f.height; ++y) {
+    // memcpy: the rows need no 4-byte alignment in the frame's buffer.
+    std::memcpy(words.data(), f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes, static_cast<std::size_t>(w) * 4);
+    if constexpr (sizeof(T) == 2)
+      luma_row_10(c, words.data(), w, row_of<T>(out.y, y), sums, sums + w, sums + 2 * w, y % 2 == 0);
+    else
+      luma_row_8(c, words.data(), w, row_of<T>(out.y, y), sums, sums + w, sums + 2 * w, y % 2 == 0);
+    if (y % 2 == 0) continue;
+    if constexpr (sizeof(T) == 2)
+      chroma_row_10(c, sums, w, filtered, row_of<T>(out.cb, y / 2), row_of<T>(out.cr, y / 2));
+    else
+      chroma_row_8(c, sums, w, filtered, row_of<T>(out.cb, y / 2), row_of<T>(out.cr, y / 2));
   }
 }
 
