@@ -100,7 +100,7 @@ double default_crf(Codec c) {
 
 std::string default_preset(const VideoSettings& s) {
   const std::string e = encoder_of(s);
-  if (e == "libsvtav1") return "8";
+  if (e == "libsvtav1") return "10";
   if (e == "libaom-av1") return "6";
   return "medium";
 }

@@ -58,9 +58,14 @@ class SequenceMetadata {
  public:
   SequenceMetadata(const DisplayTarget& target, const MasteringDisplay& mastering,
                    const SequenceMetadataSettings& settings = {});
+  SequenceMetadata(SequenceMetadata&&) = default;
+  SequenceMetadata& operator=(SequenceMetadata&&) = default;
+  SequenceMetadata(const SequenceMetadata&) = delete;  // the open scene's totals are one object's
+  SequenceMetadata& operator=(const SequenceMetadata&) = delete;
 
   // The next frame in display order; scene_start opens a new scene (the first frame always
-  // does). The frame's mode must be the sequence's.
+  // does). The frame's mode must be the sequence's. hdr10 frames are measured
+  // (measure_frame_light); others contribute their EncodedFrame::content_light.
   Result<void> add(const EncodedFrame& frame, bool scene_start);
   Result<void> add(const FrameLight& light, bool scene_start);  // when the caller measured it
   // Closes the last scene; afterwards only the accessors below.

@@ -228,6 +228,9 @@ struct SequenceWriter::Impl {
   }
 
   Result<VideoResult> mux(const SequenceMetadata* meta);
+  Result<AVStream*> start_muxer(Muxer& m, const io::Cta861Light& cll);
+  Result<void> copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta, const io::Cta861Light& cll);
+  VideoResult result(const SequenceMetadata* meta, const io::Cta861Light& cll) const;
   Result<std::vector<std::uint8_t>> with_metadata(const SpoolRecord& r, std::vector<std::uint8_t> data,
                                                   const SequenceMetadata* meta, const io::Cta861Light& cll) const;
 };
@@ -340,24 +343,36 @@ Result<std::vector<std::uint8_t>> SequenceWriter::Impl::with_metadata(const Spoo
   return hevc_insert_before_slices(data, hevc_prefix_sei_nal(sei));
 }
 
-Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
-  if (frames == 0) return make_error("video.empty", "a video needs at least one frame", "frames");
-  if (meta && meta->frame_count() != frames)
-    return make_error("video.metadata", fmt::format("metadata covers {} frames, the video has {}", meta->frame_count(), frames));
-  flushed = true;
-  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
-  if (auto ok = spool_packets(); !ok) return ok.error();
-  if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
-    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+namespace {
 
-  const bool hdr = stream.target.mode == Mode::hdr10 || stream.target.mode == Mode::hlg;
-  const ContentLightLevel light = meta ? meta->content_light() : frames_light;
-  const io::Cta861Light cll = io::cta861_light(light, stream.mastering);
+bool is_hdr(Mode m) { return m == Mode::hdr10 || m == Mode::hlg; }
 
-  auto fd = io::create_temp_file(output, output_temp);
-  if (!fd) return fd.error();
-  ::close(*fd);
-  Muxer m;
+// The container's mdcv / clli (MP4) and MasteringMetadata / MaxCLL / MaxFALL (Matroska):
+// rationals over the units of ST 2086 / CTA-861.3, so the muxers write the same integers.
+Result<void> add_static_side_data(AVStream* st, const MasteringDisplay& mastering, const io::Cta861Light& cll) {
+  const io::St2086Codes c = io::st2086_codes(mastering);
+  auto* md = reinterpret_cast<AVMasteringDisplayMetadata*>(
+      av_stream_new_side_data(st, AV_PKT_DATA_MASTERING_DISPLAY_METADATA, sizeof(AVMasteringDisplayMetadata)));
+  auto* cl = reinterpret_cast<AVContentLightMetadata*>(
+      av_stream_new_side_data(st, AV_PKT_DATA_CONTENT_LIGHT_LEVEL, sizeof(AVContentLightMetadata)));
+  if (!md || !cl) return make_error("video.mux", "out of memory");
+  std::memset(md, 0, sizeof *md);
+  const std::array<std::array<std::uint16_t, 2>, 3> rgb{c.red, c.green, c.blue};
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 2; ++k) md->display_primaries[i][k] = av_make_q(rgb[i][k], 50000);
+  md->white_point[0] = av_make_q(c.white[0], 50000);
+  md->white_point[1] = av_make_q(c.white[1], 50000);
+  md->max_luminance = av_make_q(static_cast<int>(c.max_luminance), 10000);
+  md->min_luminance = av_make_q(static_cast<int>(c.min_luminance), 10000);
+  md->has_primaries = md->has_luminance = 1;
+  cl->MaxCLL = cll.max_cll;
+  cl->MaxFALL = cll.max_fall;
+  return {};
+}
+
+}  // namespace
+
+Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Light& cll) {
   const char* format = settings.container == Container::mp4 ? "mp4" : "matroska";
   if (const int rc = avformat_alloc_output_context2(&m.ctx, nullptr, format, output_temp.c_str()); rc < 0)
     return av_fail("video.mux", fmt::format("no {} muxer", format), rc);
@@ -370,41 +385,27 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
   if (settings.codec == Codec::hevc && settings.container == Container::mp4) st->codecpar->codec_tag = MKTAG('h', 'v', 'c', '1');
   st->time_base = enc->time_base;
   st->avg_frame_rate = enc->framerate;
-  if (hdr) {
-    // The container's mdcv / clli (MP4) and MasteringMetadata / MaxCLL / MaxFALL (Matroska):
-    // rationals over the units of ST 2086 / CTA-861.3, so the muxers write the same integers.
-    const io::St2086Codes c = io::st2086_codes(stream.mastering);
-    auto* md = reinterpret_cast<AVMasteringDisplayMetadata*>(
-        av_stream_new_side_data(st, AV_PKT_DATA_MASTERING_DISPLAY_METADATA, sizeof(AVMasteringDisplayMetadata)));
-    auto* cl = reinterpret_cast<AVContentLightMetadata*>(
-        av_stream_new_side_data(st, AV_PKT_DATA_CONTENT_LIGHT_LEVEL, sizeof(AVContentLightMetadata)));
-    if (!md || !cl) return make_error("video.mux", "out of memory");
-    std::memset(md, 0, sizeof *md);
-    const std::array<std::array<std::uint16_t, 2>, 3> rgb{c.red, c.green, c.blue};
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 2; ++k) md->display_primaries[i][k] = av_make_q(rgb[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)], 50000);
-    md->white_point[0] = av_make_q(c.white[0], 50000);
-    md->white_point[1] = av_make_q(c.white[1], 50000);
-    md->max_luminance = av_make_q(static_cast<int>(c.max_luminance), 10000);
-    md->min_luminance = av_make_q(static_cast<int>(c.min_luminance), 10000);
-    md->has_primaries = md->has_luminance = 1;
-    cl->MaxCLL = cll.max_cll;
-    cl->MaxFALL = cll.max_fall;
-  }
+  if (is_hdr(stream.target.mode))
+    if (auto ok = add_static_side_data(st, stream.mastering, cll); !ok) return ok.error();
   if (const int rc = avio_open(&m.ctx->pb, output_temp.c_str(), AVIO_FLAG_WRITE); rc < 0)
     return av_fail("io.write", fmt::format("cannot write {}", output_temp.string()), rc);
-  AVDictionary* mux_opts = nullptr;
+  AVDictionary* opts = nullptr;
   // moov first, so a player (or a browser fetching GET /v1/jobs/{id}/result) starts at once.
-  if (settings.container == Container::mp4) av_dict_set(&mux_opts, "movflags", "+faststart", 0);
-  const int hrc = avformat_write_header(m.ctx, &mux_opts);
-  av_dict_free(&mux_opts);
-  if (hrc < 0) return av_fail("video.mux", fmt::format("cannot start the {} file", format), hrc);
+  if (settings.container == Container::mp4) av_dict_set(&opts, "movflags", "+faststart", 0);
+  const int rc = avformat_write_header(m.ctx, &opts);
+  av_dict_free(&opts);
+  if (rc < 0) return av_fail("video.mux", fmt::format("cannot start the {} file", format), rc);
+  return st;
+}
 
+// Every spooled packet, with its metadata inserted, into the muxer.
+Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta,
+                                                const io::Cta861Light& cll) {
   PacketPtr out(av_packet_alloc());
   if (!out) return make_error("video.mux", "out of memory");
   for (int n = 0;; ++n) {
     SpoolRecord r;
-    if (std::fread(&r, sizeof r, 1, spool.get()) != 1) break;
+    if (std::fread(&r, sizeof r, 1, spool.get()) != 1) return {};
     std::vector<std::uint8_t> data(r.size);
     if (std::fread(data.data(), 1, data.size(), spool.get()) != data.size())
       return make_error("io.read", fmt::format("spool file {} is truncated at packet {}", spool_path.string(), n));
@@ -418,16 +419,9 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
     if (const int rc = av_write_frame(m.ctx, out.get()); rc < 0) return av_fail("video.mux", fmt::format("packet {}", n), rc);
     av_packet_unref(out.get());
   }
-  if (const int rc = av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
-  if (const int rc = avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
-  spool.reset();
-  ::unlink(spool_path.c_str());
-  spool_path.clear();
-  if (auto ok = fsync_path(output_temp); !ok) return ok.error();
-  if (::rename(output_temp.c_str(), output.c_str()) != 0)
-    return make_error("io.write", fmt::format("cannot rename {} to {}: {}", output_temp.string(), output.string(), std::strerror(errno)));
-  output_temp.clear();
+}
 
+VideoResult SequenceWriter::Impl::result(const SequenceMetadata* meta, const io::Cta861Light& cll) const {
   VideoResult v;
   v.path = output;
   v.codec = std::string(to_string(settings.codec));
@@ -441,9 +435,41 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
   v.frames = frames;
   std::error_code ec;
   v.bytes = fs::file_size(output, ec);
-  if (hdr) v.content_light = ContentLightLevel{static_cast<double>(cll.max_cll), static_cast<double>(cll.max_fall)};
+  if (is_hdr(stream.target.mode)) v.content_light = ContentLightLevel{static_cast<double>(cll.max_cll), static_cast<double>(cll.max_fall)};
   v.hdr10plus = meta && settings.dynamic_metadata && meta->has_dynamic_metadata() && settings.codec != Codec::h264;
   return v;
+}
+
+Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
+  if (frames == 0) return make_error("video.empty", "a video needs at least one frame", "frames");
+  if (meta && meta->frame_count() != frames)
+    return make_error("video.metadata", fmt::format("metadata covers {} frames, the video has {}", meta->frame_count(), frames));
+  flushed = true;
+  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
+  if (auto ok = spool_packets(); !ok) return ok.error();
+  if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
+    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+
+  const io::Cta861Light cll = io::cta861_light(meta ? meta->content_light() : frames_light, stream.mastering);
+  auto fd = io::create_temp_file(output, output_temp);
+  if (!fd) return fd.error();
+  ::close(*fd);
+  {
+    Muxer m;
+    auto st = start_muxer(m, cll);
+    if (!st) return st.error();
+    if (auto ok = copy_packets(m, *st, meta, cll); !ok) return ok.error();
+    if (const int rc = av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
+    if (const int rc = avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
+  }
+  spool.reset();
+  ::unlink(spool_path.c_str());
+  spool_path.clear();
+  if (auto ok = fsync_path(output_temp); !ok) return ok.error();
+  if (::rename(output_temp.c_str(), output.c_str()) != 0)
+    return make_error("io.write", fmt::format("cannot rename {} to {}: {}", output_temp.string(), output.string(), std::strerror(errno)));
+  output_temp.clear();
+  return result(meta, cll);
 }
 
 }  // namespace hdrd::video

@@ -197,6 +197,15 @@ TEST(SequenceMetadata, DynamicMetadataIsForPq) {
   EXPECT_FALSE(m.has_dynamic_metadata());
   const EncodedFrame f = hdr10_frame(8, 8, 100, 500, 3);
   EXPECT_EQ(m.add(f, true).error().code, "video.mode");
+  // HLG: the sequence's content light is the frames' own (measured by the encoder).
+  EncodedFrame a = frame_of_codes(Mode::hlg, Range::full, 10, 8, 8, [](int x, int) { return std::array<int, 3>{700 + x, 600, 500}; });
+  EncodedFrame b = a;
+  b.content_light = {250.0, 90.0};
+  ASSERT_TRUE(m.add(a, true).ok());
+  ASSERT_TRUE(m.add(b, false).ok());
+  m.finish();
+  EXPECT_EQ(m.content_light().max_cll_nits, std::max(a.content_light.max_cll_nits, 250.0));
+  EXPECT_EQ(m.content_light().max_fall_nits, std::max(a.content_light.max_fall_nits, 90.0));
 }
 
 TEST(Bezier, FollowsBt2390AndStaysInRange) {
