@@ -30,6 +30,9 @@ pkg_check_modules(JXL REQUIRED IMPORTED_TARGET libjxl>=0.7 libjxl_threads>=0.7)
 pkg_check_modules(JPEG REQUIRED IMPORTED_TARGET libjpeg)
 
 pkg_check_modules(MHD REQUIRED IMPORTED_TARGET libmicrohttpd)
+
+# Video (encode/video): FFmpeg 5.1's libraries with Debian's x265, SVT-AV1, libaom, x264.
+pkg_check_modules(LIBAV REQUIRED IMPORTED_TARGET libavcodec libavformat libavutil)
 find_package(tomlplusplus CONFIG REQUIRED)
 
 if(HDRD_BUILD_TESTS)

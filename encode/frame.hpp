@@ -2,6 +2,7 @@
 // and the metadata that says exactly what is in it (REFERENCE.md §1.7, §6).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -50,9 +51,26 @@ struct EncodedFrame {
   nlohmann::json settings = nlohmann::json::object();
 };
 
-// MaxCLL / MaxFALL measured by decoding the frame's own codes (REFERENCE.md §6):
-// hdr10 through the PQ EOTF, hlg through the BT.2100 EOTF at the target peak, scrgb as
-// the Rec.2020 signal it would be sent as. Zero for SDR modes.
+// The light of a frame's pixels, decoded from its own codes as a display shows them
+// (REFERENCE.md §6): hdr10 through the PQ EOTF, hlg through the BT.2100 EOTF at the
+// target peak, scrgb as the Rec.2020 signal it would be sent as. Per pixel,
+// maxRGB = max(R, G, B, 0) of the Rec.2020 display light in cd/m2. MaxCLL/MaxFALL and the
+// per-frame statistics of sequences (HDR10+, Dolby Vision level 1) all read it.
+// Empty (pixels == 0) for SDR modes.
+struct FrameLight {
+  static constexpr int kPqBins = 4096;
+  std::array<double, 3> max_channel_nits{};  // largest R, G and B of any pixel (ST 2094-40 maxscl)
+  double max_nits = 0;                       // largest maxRGB (the frame's MaxCLL)
+  double mean_nits = 0;                      // average maxRGB (its frame-average light level)
+  double min_nits = 0;                       // smallest maxRGB
+  std::uint64_t pixels = 0;
+  // maxRGB distribution: pixels per 12-bit PQ level round(PQ_inv(maxRGB) * 4095). For
+  // hdr10 every 10-bit code has a level of its own.
+  std::array<std::uint32_t, kPqBins> pq_counts{};
+};
+FrameLight measure_frame_light(const EncodedFrame& frame);
+
+// MaxCLL / MaxFALL of one frame: FrameLight's max_nits and mean_nits. Zero for SDR modes.
 ContentLightLevel measure_content_light(const EncodedFrame& frame);
 
 }  // namespace hdrd

@@ -7,15 +7,16 @@ packages=(
   build-essential cmake ninja-build pkg-config git curl python3
   libopenexr-dev libimath-dev libopencolorio-dev opencolorio-tools
   libpng-dev zlib1g-dev
-  libegl-dev libgles-dev libgl-dev libosmesa6-dev libgl1-mesa-dri libegl-mesa0
+  libegl-dev libgl-dev libosmesa6-dev libgl1-mesa-dri libegl-mesa0
   libdrm-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libtinygltf-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libmicrohttpd-dev libtomlplusplus-dev libhwy-dev libzimg-dev
   clang-14 libclang-rt-14-dev
   edid-decode
+  libavcodec-dev libavformat-dev libavutil-dev
   libavif-dev libjxl-dev libjpeg62-turbo-dev
-  # decoders the stills tests read the files back with (they skip without them)
+  # decoders the tests read the files back with (they skip without them)
   libavif-bin libheif-examples libjxl-tools libjpeg-turbo-progs ffmpeg libimage-exiftool-perl
 )
 

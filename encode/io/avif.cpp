@@ -14,6 +14,7 @@
 #include "encode/colour/transfer.hpp"
 #include "encode/io/avif_boxes.hpp"
 #include "encode/io/internal.hpp"
+#include "encode/io/signal_metadata.hpp"
 #include "encode/io/io.hpp"
 #include "encode/io/stills.hpp"
 
@@ -148,9 +149,10 @@ std::vector<std::vector<std::uint8_t>> hdr_properties(const EncodedFrame& f) {
   const auto put = [](std::vector<std::uint8_t>& v, std::uint32_t x, int n) {
     for (int s = 8 * (n - 1); s >= 0; s -= 8) v.push_back(static_cast<std::uint8_t>(x >> s));
   };
-  put(clli, detail::carried_light(f.content_light.max_cll_nits, 1.0, 65535, f.mastering), 2);
-  put(clli, detail::carried_light(f.content_light.max_fall_nits, 1.0, 65535, f.mastering), 2);
-  const detail::St2086Units u = detail::st2086_units(f.mastering);
+  const Cta861Light light = cta861_light(f.content_light, f.mastering);
+  put(clli, light.max_cll, 2);
+  put(clli, light.max_fall, 2);
+  const St2086Codes u = st2086_codes(f.mastering);
   for (const auto& xy : {u.green, u.blue, u.red, u.white}) put(mdcv, xy[0], 2), put(mdcv, xy[1], 2);
   put(mdcv, u.max_luminance, 4);
   put(mdcv, u.min_luminance, 4);
@@ -181,10 +183,10 @@ Result<std::vector<std::uint8_t>> encode_avif(const EncodedFrame& frame, const A
       avifImageCreate(static_cast<std::uint32_t>(frame.width), static_cast<std::uint32_t>(frame.height),
                       static_cast<std::uint32_t>(plan->bits), pixel_format(plan->chroma)));
   if (!img) return make_error("avif.encode", "libavif cannot allocate an image");
-  const detail::Cicp cicp = detail::cicp_for(frame.target);
+  const H273 cicp = h273(frame.target);
   img->colorPrimaries = cicp.primaries;
   img->transferCharacteristics = cicp.transfer;
-  img->matrixCoefficients = plan->matrix == AvifMatrix::rgb ? 0 : detail::ycbcr_matrix(frame.target);
+  img->matrixCoefficients = plan->matrix == AvifMatrix::rgb ? 0 : ycbcr_matrix(frame.target);
   img->yuvRange = plan->range == Range::full ? AVIF_RANGE_FULL : AVIF_RANGE_LIMITED;
   if (plan->matrix == AvifMatrix::rgb) {
     avifImageAllocatePlanes(img.get(), AVIF_PLANES_YUV);

@@ -93,9 +93,11 @@ Error write_error(const fs::path& path, const std::string& what, int err) {
   return make_error("io.write", fmt::format("cannot write {}: {} ({})", path.string(), what, errno_text(err)));
 }
 
+}  // namespace
+
 // Creates "<dir>/.<name>.tmp-<random>" with O_EXCL (mode 0666 less the umask, as a plain
 // open would give the final file).
-Result<int> create_temp(const fs::path& final_path, fs::path& temp) {
+Result<int> create_temp_file(const fs::path& final_path, fs::path& temp) {
   static thread_local std::mt19937_64 rng{std::random_device{}()};
   const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
   for (int attempt = 0; attempt < 16; ++attempt) {
@@ -107,9 +109,11 @@ Result<int> create_temp(const fs::path& final_path, fs::path& temp) {
   return write_error(final_path, "cannot create a temporary file", EEXIST);
 }
 
+namespace {
+
 Result<TempFile> TempFile::write(const fs::path& final_path, std::span<const std::uint8_t> bytes) {
   TempFile t;
-  auto fd = create_temp(final_path, t.temp_);
+  auto fd = create_temp_file(final_path, t.temp_);
   if (!fd) return fd.error();
   t.final_ = final_path;
   std::size_t done = 0;

@@ -23,31 +23,8 @@ Result<void> check_frame(const EncodedFrame& frame);
 
 // ---- What every still format says about the signal (one source for PNG, AVIF, JPEG XL) ----
 
-// ITU-T H.273 code points of a frame's signal. `matrix` is 0 (identity: RGB) here; a
-// Y'CbCr writer replaces it with ycbcr_matrix().
-struct Cicp {
-  std::uint8_t primaries = 1, transfer = 13, matrix = 0;
-  bool full_range = true;
-};
-// hdr10 9/16, hlg 9/18; sdr 1/13 (sRGB curve) or 1/4 (gamma 2.2); sdr-bt1886 1/1.
-// scrgb has no code points of its own here (its writers reject it first).
-Cicp cicp_for(const DisplayTarget& t);
-// Non-constant-luminance Y'CbCr of the container (H.273 Table 4): 9 = BT.2020 NCL for
-// Rec.2020, 1 = BT.709 for Rec.709.
-std::uint8_t ycbcr_matrix(const DisplayTarget& t);
-
-// SMPTE ST 2086 mastering display in the units PNG mDCV and the ISOBMFF mdcv box share
-// (and HEVC/H.273 SEI): chromaticity x, y in 0.00002, luminance in 0.0001 cd/m2.
-struct St2086Units {
-  std::array<std::uint16_t, 2> red{}, green{}, blue{}, white{};
-  std::uint32_t max_luminance = 0, min_luminance = 0;
-};
-St2086Units st2086_units(const MasteringDisplay& m);
-
-// MaxCLL or MaxFALL as a container carries it: in units of `unit_nits`, rounded up so
-// the file never states less than was measured, capped at `max_units`; 0 ("unknown",
-// which some displays mishandle) becomes the mastering peak (REFERENCE.md §6).
-std::uint32_t carried_light(double nits, double unit_nits, double max_units, const MasteringDisplay& m);
+// H.273 code points: hdrd::h273() (the mode table); ST 2086 and content light in a
+// carrier's units: encode/io/signal_metadata.hpp (one rule for PNG, AVIF, video, KMS).
 
 // The 10-bit code (XBGR2101010) or 8-bit code (XRGB8888) of pixel (x, y), channel c
 // (0 R, 1 G, 2 B). Inline: the writers call it per sample.

@@ -85,6 +85,10 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
 
 // Writes bytes to `path` atomically.
 Result<void> atomic_write(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+// For writers that stream (video): creates "<dir>/.<name>.tmp-<random>" beside final_path
+// with O_EXCL and returns its open descriptor (the caller closes it, and renames the file
+// to final_path once it is complete, or removes it).
+Result<int> create_temp_file(const std::filesystem::path& final_path, std::filesystem::path& temp);
 
 // Writes a set of files together: each under a temporary name first, then all renamed;
 // on any failure none is left behind (renamed ones are removed again).

@@ -13,6 +13,7 @@
 
 #include "encode/colour/transfer.hpp"
 #include "encode/io/internal.hpp"
+#include "encode/io/signal_metadata.hpp"
 #include "encode/io/io.hpp"
 #include "encode/io/stills.hpp"
 
@@ -51,7 +52,7 @@ JxlColorEncoding colour_encoding(const DisplayTarget& t) {
   c.color_space = JXL_COLOR_SPACE_RGB;
   c.white_point = JXL_WHITE_POINT_D65;
   c.rendering_intent = JXL_RENDERING_INTENT_RELATIVE;
-  const detail::Cicp cicp = detail::cicp_for(t);
+  const H273 cicp = h273(t);
   c.primaries = cicp.primaries == 9 ? JXL_PRIMARIES_2100 : JXL_PRIMARIES_SRGB;
   switch (cicp.transfer) {
     case 16: c.transfer_function = JXL_TRANSFER_FUNCTION_PQ; break;

@@ -14,6 +14,7 @@
 
 #include "encode/io/io.hpp"
 #include "encode/io/internal.hpp"
+#include "encode/io/signal_metadata.hpp"
 
 namespace hdrd::io {
 namespace fs = std::filesystem;
@@ -50,21 +51,23 @@ void put_u32(std::vector<std::uint8_t>& v, std::uint32_t x) {
   put_u16(v, x & 0xffff);
 }
 
+// PNG 3rd edition §11.3.2.6: primaries, transfer, matrix 0 (RGB), full-range flag.
 std::vector<std::uint8_t> cicp_for(const DisplayTarget& t) {
-  const detail::Cicp c = detail::cicp_for(t);
-  return {c.primaries, c.transfer, c.matrix, static_cast<std::uint8_t>(c.full_range ? 1 : 0)};
+  const H273 h = h273(t);
+  return {h.primaries, h.transfer, kH273MatrixIdentity,
+          static_cast<std::uint8_t>(t.range == Range::full ? 1 : 0)};
 }
 
 // mDCV: R, G, B and white x,y as u16 in 0.00002, then max and min luminance as u32 in 0.0001 cd/m2.
 std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
-  const detail::St2086Units u = detail::st2086_units(m);
+  const St2086Codes c = st2086_codes(m);
   std::vector<std::uint8_t> v;
-  for (const auto& xy : {u.red, u.green, u.blue, u.white}) {
+  for (const auto& xy : {c.red, c.green, c.blue, c.white}) {
     put_u16(v, xy[0]);
     put_u16(v, xy[1]);
   }
-  put_u32(v, u.max_luminance);
-  put_u32(v, u.min_luminance);
+  put_u32(v, c.max_luminance);
+  put_u32(v, c.min_luminance);
   return v;
 }
 
@@ -72,8 +75,9 @@ std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
 // peak, as in the KMS metadata blob (display/hdr_metadata.cpp).
 std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
-  put_u32(v, detail::carried_light(l.max_cll_nits, 0.0001, 4294967295.0, m));
-  put_u32(v, detail::carried_light(l.max_fall_nits, 0.0001, 4294967295.0, m));
+  const CarriedLight c = carried_light(l, m, 0.0001, 4294967295.0);
+  put_u32(v, c.max_cll);
+  put_u32(v, c.max_fall);
   return v;
 }
 

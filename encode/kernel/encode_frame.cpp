@@ -355,9 +355,7 @@ void stage_encode(const FrameJob& job, int y, int x0, int n, const float* row, C
       cll.sum_nits += mx;
     } else if (s.mode == Mode::hlg) {
       const float er = s.code_to_nits[code[0]], eg = s.code_to_nits[code[1]], eb = s.code_to_nits[code[2]];
-      const float ys = 0.2627f * er + 0.6780f * eg + 0.0593f * eb;
-      const float k = ys > 0 ? s.hlg_peak * std::pow(ys, s.hlg_gamma - 1) : 0.0f;
-      const float mx = k * std::max({er, eg, eb});
+      const float mx = detail::hlg_ootf_gain(s, er, eg, eb) * std::max({er, eg, eb});
       cll.max_nits = std::max<double>(cll.max_nits, mx);
       cll.sum_nits += mx;
     }

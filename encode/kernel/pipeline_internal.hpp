@@ -2,6 +2,7 @@
 // GPU program generator: stage tables built from the reference functions.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -45,6 +46,14 @@ struct SignalStage {
 };
 // The largest error of code_nits_poly kept (nits): MaxFALL is reported in whole nits.
 inline constexpr double kCodeLightFitTolerance = 1e-3;
+
+// HLG display light of a pixel from its scene light e = inverse OETF (code_to_nits):
+// F_D = gain * e with gain = Lw * Ys^(gamma - 1), Ys the Rec.2020 luminance of e
+// (BT.2100 table 5, Lb = 0). Shared by the encoder's MaxCLL and measure_frame_light.
+inline float hlg_ootf_gain(const SignalStage& s, float er, float eg, float eb) {
+  const float ys = 0.2627f * er + 0.6780f * eg + 0.0593f * eb;
+  return ys > 0 ? s.hlg_peak * std::pow(ys, s.hlg_gamma - 1) : 0.0f;
+}
 
 ToneStage build_tone_stage(const PreparedPipeline& p);
 SignalStage build_signal_stage(const DisplayTarget& t);

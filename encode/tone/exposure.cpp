@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -57,7 +58,11 @@ Result<void> check_settings(const Settings& s) {
     return bad("exposure.ignore", "ignore fractions must be >= 0 and sum to less than 1");
   if (s.illuminance_lux && !(*s.illuminance_lux > 0 && std::isfinite(*s.illuminance_lux)))
     return bad("exposure.illuminance_lux", "illuminance must be > 0 lux");
-  if (!(s.adaptation_time_s >= 0)) return bad("exposure.adaptation_time_s", "adaptation time must be >= 0");
+  if (!(s.adaptation_time_s >= 0 && s.adaptation_time_s <= 1000))
+    return bad("exposure.adaptation_time_s", "adaptation time must be within [0, 1000] s");
+  for (auto [v, field] : {std::pair{s.adaptation_brighten_time_s, "exposure.adaptation_brighten_time_s"},
+                          std::pair{s.adaptation_darken_time_s, "exposure.adaptation_darken_time_s"}})
+    if (v && !(*v >= 0 && *v <= 1000)) return bad(field, fmt::format("{} must be within [0, 1000] s", field));
   return {};
 }
 
@@ -133,17 +138,6 @@ Result<Metering> meter(const Settings& s, std::span<const float> luminance_nits,
   }
   m.scale *= comp;
   return m;
-}
-
-double Adaptation::update(double target_scale, double dt_s) {
-  const double target = std::log2(target_scale);
-  if (!have_ || tau_s_ <= 0) {
-    log2_scale_ = target;
-    have_ = true;
-  } else {
-    log2_scale_ += (target - log2_scale_) * (1.0 - std::exp(-std::max(dt_s, 0.0) / tau_s_));
-  }
-  return std::exp2(log2_scale_);
 }
 
 }  // namespace hdrd::exposure

@@ -32,8 +32,12 @@ struct Settings {
   double ignore_bright_fraction = 0.02;  // fraction of brightest pixels ignored (robust to a few highlights)
   // light-based: the dominant illuminance E in lux (from the renderer or given)
   std::optional<double> illuminance_lux;
-  // sequences: time constant of exponential adaptation (0 = instant)
+  // sequences (encode/tone/adaptation.hpp): time constant of exponential adaptation in
+  // stops, both directions (0 = none: every frame exposed from its own metering); the
+  // per-direction constants override it when given.
   double adaptation_time_s = 0.0;
+  std::optional<double> adaptation_brighten_time_s;  // while the exposure rises (into the dark)
+  std::optional<double> adaptation_darken_time_s;    // while it falls (into the light)
 };
 
 // What the metering found; scale multiplies scene values (absolute cd/m2 for absolute
@@ -58,18 +62,5 @@ double scale_from_ev100(double ev100);
 // Samples that are not finite are ignored. `luminance` may be empty for manual, camera
 // and light modes.
 Result<Metering> meter(const Settings& s, std::span<const float> luminance_nits, double paper_white_nits);
-
-// Temporal adaptation for sequences: exponential smoothing of log2(scale).
-class Adaptation {
- public:
-  explicit Adaptation(double time_constant_s) : tau_s_(time_constant_s) {}
-  double update(double target_scale, double dt_s);
-  void reset() { have_ = false; }
-
- private:
-  double tau_s_;
-  double log2_scale_ = 0;
-  bool have_ = false;
-};
 
 }  // namespace hdrd::exposure

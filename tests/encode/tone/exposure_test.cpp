@@ -85,13 +85,4 @@ TEST(Exposure, InvalidSettingsNameTheField) {
   EXPECT_FALSE(meter(h, nan, 203).ok());
 }
 
-TEST(Exposure, AdaptationConvergesExponentially) {
-  Adaptation a(1.0);
-  EXPECT_DOUBLE_EQ(a.update(1.0, 0.0), 1.0);
-  const double s1 = a.update(16.0, 1.0);  // one time constant: 63 % of the way in log2
-  EXPECT_NEAR(std::log2(s1), 4 * (1 - std::exp(-1.0)), 1e-12);
-  for (int i = 0; i < 50; ++i) a.update(16.0, 1.0);
-  EXPECT_NEAR(a.update(16.0, 1.0), 16.0, 1e-6);
-}
-
 }  // namespace

@@ -1,0 +1,31 @@
+#include "encode/tone/temporal.hpp"
+
+namespace hdrd::temporal {
+
+Result<void> validate(const TemporalSettings& s) {
+  if (auto r = validate(s.adaptation); !r) return r;
+  if (auto r = validate(s.scene_cut); !r) return r;
+  return validate(s.peak);
+}
+
+Result<FrameDecision> TemporalTone::next(std::span<const float> luminance_nits, const exposure::Settings& exposure,
+                                         double paper_white_nits, double dt_s, bool given_cut) {
+  FrameDecision d;
+  const LuminanceHistogram histogram = LuminanceHistogram::of(luminance_nits);
+  const bool detected = cuts_.next(histogram);
+  d.cut_distance_stops = cuts_.last_distance();
+  d.scene_start = first_ || given_cut || (settings_.detect_cuts && detected);
+  first_ = false;
+  auto metering = exposure::meter(exposure, luminance_nits, paper_white_nits);
+  if (!metering) return metering.error();
+  d.own_scale = metering->scale;
+  auto scale = adaptation_.next(d.own_scale, dt_s, d.scene_start);
+  if (!scale) return scale.error();
+  d.exposure_scale = *scale;
+  auto peak = peak_.next(histogram, d.exposure_scale, dt_s, d.scene_start);
+  if (!peak) return peak.error();
+  d.source_peak = *peak;
+  return d;
+}
+
+}  // namespace hdrd::temporal

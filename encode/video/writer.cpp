@@ -1,0 +1,475 @@
+#include "encode/video/writer.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include <fmt/format.h>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/mastering_display_metadata.h>
+#include <libavutil/opt.h>
+}
+
+#include "encode/io/io.hpp"
+#include "encode/io/signal_metadata.hpp"
+#include "encode/video/bitstream.hpp"
+#include "encode/video/encoder_config.hpp"
+#include "encode/video/ycbcr.hpp"
+
+namespace hdrd::video {
+
+namespace fs = std::filesystem;
+
+// ---- names --------------------------------------------------------------------------------
+
+std::string_view to_string(Codec c) {
+  switch (c) {
+    case Codec::hevc: return "hevc";
+    case Codec::av1: return "av1";
+    case Codec::h264: return "h264";
+  }
+  return "?";
+}
+std::string_view to_string(Container c) { return c == Container::mp4 ? "mp4" : "mkv"; }
+std::optional<Codec> parse_codec(std::string_view s) {
+  if (s == "hevc" || s == "h265") return Codec::hevc;
+  if (s == "av1") return Codec::av1;
+  if (s == "h264" || s == "avc") return Codec::h264;
+  return std::nullopt;
+}
+std::optional<Container> parse_container(std::string_view s) {
+  if (s == "mp4") return Container::mp4;
+  if (s == "mkv" || s == "matroska") return Container::mkv;
+  return std::nullopt;
+}
+std::string_view file_extension(Container c) { return c == Container::mp4 ? ".mp4" : ".mkv"; }
+
+nlohmann::json VideoResult::to_json() const {
+  nlohmann::json j{{"file", path.string()},
+                   {"codec", codec},
+                   {"encoder", encoder},
+                   {"profile", profile},
+                   {"pixel_format", pixel_format},
+                   {"colour_primaries", colour_primaries},
+                   {"transfer_characteristics", transfer_characteristics},
+                   {"matrix_coefficients", matrix_coefficients},
+                   {"range", range},
+                   {"frames", frames},
+                   {"bytes", bytes},
+                   {"hdr10plus", hdr10plus}};
+  if (content_light)
+    j["content_light_level"] = {{"max_cll_nits", content_light->max_cll_nits}, {"max_fall_nits", content_light->max_fall_nits}};
+  return j;
+}
+
+void quiet_codec_logs() {
+  av_log_set_level(AV_LOG_ERROR);
+  ::setenv("SVT_LOG", "1", 0);  // SVT-AV1's own logger: 1 = errors
+}
+
+// ---- libav plumbing ---------------------------------------------------------------------------
+
+namespace {
+
+std::string av_error_text(int err) {
+  char buf[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(err, buf, sizeof buf);
+  return buf;
+}
+
+Error av_fail(const char* code, const std::string& what, int err) {
+  return make_error(code, fmt::format("{}: {}", what, av_error_text(err)));
+}
+
+struct CodecContextFree {
+  void operator()(AVCodecContext* c) const { avcodec_free_context(&c); }
+};
+struct FrameFree {
+  void operator()(AVFrame* f) const { av_frame_free(&f); }
+};
+struct PacketFree {
+  void operator()(AVPacket* p) const { av_packet_free(&p); }
+};
+struct FileClose {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using CodecContextPtr = std::unique_ptr<AVCodecContext, CodecContextFree>;
+using FramePtr = std::unique_ptr<AVFrame, FrameFree>;
+using PacketPtr = std::unique_ptr<AVPacket, PacketFree>;
+using FilePtr = std::unique_ptr<std::FILE, FileClose>;
+
+// The output muxer; frees the context and closes its file.
+struct Muxer {
+  AVFormatContext* ctx = nullptr;
+  ~Muxer() {
+    if (!ctx) return;
+    if (ctx->pb) avio_closep(&ctx->pb);
+    avformat_free_context(ctx);
+  }
+};
+
+// A spooled packet: its header, then its bytes.
+struct SpoolRecord {
+  std::int64_t pts = 0, dts = 0, duration = 0;
+  std::int32_t flags = 0;
+  std::uint32_t size = 0;
+};
+
+Result<void> fsync_path(const fs::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return make_error("io.write", fmt::format("cannot reopen {}: {}", p.string(), std::strerror(errno)));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0) return make_error("io.write", fmt::format("fsync {} failed: {}", p.string(), std::strerror(err)));
+  return {};
+}
+
+}  // namespace
+
+// ---- the writer ----------------------------------------------------------------------------------
+
+struct SequenceWriter::Impl {
+  VideoSettings settings;
+  StreamInfo stream;
+  EncoderConfig config;
+  YcbcrFormat ycbcr;
+  fs::path output, output_temp, spool_path;
+  CodecContextPtr enc;
+  FramePtr frame;
+  PacketPtr packet;
+  FilePtr spool;
+  int frames = 0;
+  ContentLightLevel frames_light;  // from EncodedFrame::content_light, when no metadata is given
+  bool failed = false, done = false;
+  bool opened = false, flushed = false;  // the encoder's state, for close_encoder()
+
+  ~Impl() { remove_files(); }
+
+  void remove_files() {
+    spool.reset();
+    close_encoder();
+    for (const fs::path* p : {&spool_path, &output_temp})
+      if (!p->empty()) ::unlink(p->c_str());
+    spool_path.clear();
+    output_temp.clear();
+  }
+
+  // SVT-AV1 1.4 under FFmpeg 5.1 waits forever in svt_av1_enc_deinit() unless it has
+  // seen the end of the stream, so an encoder that is closed early is flushed first (its
+  // packets are dropped). The others close at once.
+  void close_encoder() {
+    if (enc && opened && !flushed && config.encoder == "libsvtav1") {
+      flushed = true;
+      if (avcodec_send_frame(enc.get(), nullptr) >= 0)
+        while (avcodec_receive_packet(enc.get(), packet.get()) >= 0) av_packet_unref(packet.get());
+    }
+    enc.reset();
+  }
+
+  Result<void> open_spool() {
+    auto fd = io::create_temp_file(output, spool_path);
+    if (!fd) return fd.error();
+    ::close(*fd);  // created write-only; the spool is read back in finish()
+    spool.reset(std::fopen(spool_path.c_str(), "w+b"));
+    if (!spool) return make_error("io.write", fmt::format("cannot open the spool file {}: {}", spool_path.string(), std::strerror(errno)));
+    return {};
+  }
+
+  Result<void> spool_packets() {
+    for (;;) {
+      const int rc = avcodec_receive_packet(enc.get(), packet.get());
+      if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return {};
+      if (rc < 0) return av_fail("video.encoder", fmt::format("{} failed", config.encoder), rc);
+      SpoolRecord r{packet->pts, packet->dts, packet->duration, packet->flags, static_cast<std::uint32_t>(packet->size)};
+      const bool ok = std::fwrite(&r, sizeof r, 1, spool.get()) == 1 &&
+                      std::fwrite(packet->data, 1, static_cast<std::size_t>(packet->size), spool.get()) ==
+                          static_cast<std::size_t>(packet->size);
+      av_packet_unref(packet.get());
+      if (!ok) return make_error("io.write", fmt::format("cannot write the spool file {}: {}", spool_path.string(), std::strerror(errno)));
+    }
+  }
+
+  Result<void> check_frame(const EncodedFrame& f) const {
+    if (f.width != stream.width || f.height != stream.height)
+      return make_error("video.frame", fmt::format("frame {} is {}x{}, the video {}x{}", frames, f.width, f.height,
+                                                   stream.width, stream.height), "size");
+    if (f.target.mode != stream.target.mode || f.target.range != stream.target.range)
+      return make_error("video.frame", fmt::format("frame {} is {} ({} range), the video {} ({} range)", frames,
+                                                   to_string(f.target.mode), to_string(f.target.range),
+                                                   to_string(stream.target.mode), to_string(stream.target.range)),
+                        "display.mode");
+    return {};
+  }
+
+  Result<void> encode(const EncodedFrame& f, const FrameOptions& o) {
+    if (auto ok = check_frame(f); !ok) return ok;
+    if (const int rc = av_frame_make_writable(frame.get()); rc < 0) return av_fail("video.encoder", "frame buffer", rc);
+    const Planes420 planes{{frame->data[0], frame->linesize[0]}, {frame->data[1], frame->linesize[1]},
+                           {frame->data[2], frame->linesize[2]}};
+    if (auto ok = rgb_to_ycbcr420(f, ycbcr, planes); !ok) return ok;
+    frame->pts = frames;
+    frame->pict_type = o.keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
+    if (const int rc = avcodec_send_frame(enc.get(), frame.get()); rc < 0)
+      return av_fail("video.encoder", fmt::format("{} refused frame {}", config.encoder, frames), rc);
+    frames_light.max_cll_nits = std::max(frames_light.max_cll_nits, f.content_light.max_cll_nits);
+    frames_light.max_fall_nits = std::max(frames_light.max_fall_nits, f.content_light.max_fall_nits);
+    ++frames;
+    return spool_packets();
+  }
+
+  Result<VideoResult> mux(const SequenceMetadata* meta);
+  Result<AVStream*> start_muxer(Muxer& m, const io::Cta861Light& cll);
+  Result<void> copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta, const io::Cta861Light& cll);
+  VideoResult result(const SequenceMetadata* meta, const io::Cta861Light& cll) const;
+  Result<std::vector<std::uint8_t>> with_metadata(const SpoolRecord& r, std::vector<std::uint8_t> data,
+                                                  const SequenceMetadata* meta, const io::Cta861Light& cll) const;
+};
+
+Result<std::unique_ptr<SequenceWriter>> SequenceWriter::open(const fs::path& outbase, const VideoSettings& settings,
+                                                             const StreamInfo& stream) {
+  auto impl = std::make_unique<Impl>();
+  impl->settings = settings;
+  impl->stream = stream;
+  auto config = encoder_config(settings, stream);
+  if (!config) return config.error();
+  impl->config = std::move(*config);
+  impl->ycbcr.bits = impl->config.bits;
+  impl->ycbcr.range = settings.range;
+  impl->ycbcr.luma = stream.target.mode == Mode::hdr10 || stream.target.mode == Mode::hlg ? color::kRec2020Luma
+                                                                                          : color::kRec709Luma;
+  impl->output = fs::path(outbase.string() + std::string(file_extension(settings.container)));
+
+  const AVCodec* codec = avcodec_find_encoder_by_name(impl->config.encoder.c_str());
+  if (!codec)
+    return make_error("video.encoder", fmt::format("this libavcodec has no {} encoder", impl->config.encoder), "video.codec");
+  impl->enc.reset(avcodec_alloc_context3(codec));
+  impl->frame.reset(av_frame_alloc());
+  impl->packet.reset(av_packet_alloc());
+  if (!impl->enc || !impl->frame || !impl->packet) return make_error("video.encoder", "out of memory");
+  if (auto ok = configure(impl->config, settings, stream, *impl->enc); !ok) return ok.error();
+  AVDictionary* opts = nullptr;
+  for (const auto& [k, v] : impl->config.options) av_dict_set(&opts, k.c_str(), v.c_str(), 0);
+  const int rc = avcodec_open2(impl->enc.get(), codec, &opts);
+  AVDictionaryEntry* unused = av_dict_get(opts, "", nullptr, AV_DICT_IGNORE_SUFFIX);
+  const std::string unused_key = unused ? unused->key : "";
+  av_dict_free(&opts);
+  if (rc < 0) return av_fail("video.encoder", fmt::format("cannot open {}", impl->config.encoder), rc);
+  impl->opened = true;
+  if (!unused_key.empty())
+    return make_error("video.encoder", fmt::format("{} does not take the option {}", impl->config.encoder, unused_key));
+
+  AVFrame* f = impl->frame.get();
+  f->format = impl->enc->pix_fmt;
+  f->width = stream.width;
+  f->height = stream.height;
+  if (const int r = av_frame_get_buffer(f, 0); r < 0) return av_fail("video.encoder", "frame buffer", r);
+  if (auto ok = impl->open_spool(); !ok) return ok.error();
+  return std::unique_ptr<SequenceWriter>(new SequenceWriter(std::move(impl)));
+}
+
+SequenceWriter::SequenceWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SequenceWriter::~SequenceWriter() = default;
+
+int SequenceWriter::frames_written() const { return impl_->frames; }
+const fs::path& SequenceWriter::output_path() const { return impl_->output; }
+
+Result<void> SequenceWriter::write(const EncodedFrame& frame, const FrameOptions& options) {
+  if (impl_->done || impl_->failed)
+    return make_error("video.state", impl_->done ? "the video is already finished" : "the writer failed earlier");
+  auto ok = impl_->encode(frame, options);
+  if (!ok) impl_->failed = true;
+  return ok;
+}
+
+void SequenceWriter::cancel() {
+  impl_->failed = true;
+  impl_->remove_files();
+}
+
+Result<VideoResult> SequenceWriter::finish(const SequenceMetadata* metadata) {
+  if (impl_->done || impl_->failed)
+    return make_error("video.state", impl_->done ? "the video is already finished" : "the writer failed earlier");
+  auto r = impl_->mux(metadata);
+  if (!r) {
+    impl_->failed = true;
+    impl_->remove_files();
+    return r;
+  }
+  impl_->done = true;
+  return r;
+}
+
+// ---- the second pass: mux with the final metadata ---------------------------------------------
+
+Result<std::vector<std::uint8_t>> SequenceWriter::Impl::with_metadata(const SpoolRecord& r, std::vector<std::uint8_t> data,
+                                                                      const SequenceMetadata* meta,
+                                                                      const io::Cta861Light& cll) const {
+  const bool hdr = stream.target.mode == Mode::hdr10 || stream.target.mode == Mode::hlg;
+  const bool key = r.flags & AV_PKT_FLAG_KEY;
+  const bool dynamic = meta && settings.dynamic_metadata && meta->has_dynamic_metadata() && settings.codec != Codec::h264;
+  if (!hdr || (!key && !dynamic)) return data;
+  std::vector<std::uint8_t> t35;
+  if (dynamic) {
+    if (r.pts < 0 || r.pts >= meta->frame_count())
+      return make_error("video.mux", fmt::format("packet for frame {} outside the {} frames", r.pts, meta->frame_count()));
+    t35 = hdr10plus_t35(meta->hdr10plus(static_cast<int>(r.pts)));
+  }
+  if (settings.codec == Codec::av1) {
+    std::vector<std::uint8_t> obus;
+    auto append = [&](std::vector<std::uint8_t> o) { obus.insert(obus.end(), o.begin(), o.end()); };
+    if (key) {
+      append(av1_metadata_obu(kAv1MetadataHdrMdcv, av1_mastering_display(stream.mastering)));
+      append(av1_metadata_obu(kAv1MetadataHdrCll, av1_content_light(cll)));
+    }
+    if (dynamic) append(av1_metadata_obu(kAv1MetadataItutT35, t35));
+    return av1_insert_before_frames(data, obus);
+  }
+  std::vector<SeiMessage> sei;
+  if (key) {
+    sei.push_back({kSeiMasteringDisplayColourVolume, sei_mastering_display(io::st2086_codes(stream.mastering))});
+    sei.push_back({kSeiContentLightLevelInfo, sei_content_light(cll)});
+  }
+  if (dynamic) sei.push_back({kSeiUserDataRegisteredT35, t35});
+  return hevc_insert_before_slices(data, hevc_prefix_sei_nal(sei));
+}
+
+namespace {
+
+bool is_hdr(Mode m) { return m == Mode::hdr10 || m == Mode::hlg; }
+
+// The container's mdcv / clli (MP4) and MasteringMetadata / MaxCLL / MaxFALL (Matroska):
+// rationals over the units of ST 2086 / CTA-861.3, so the muxers write the same integers.
+Result<void> add_static_side_data(AVStream* st, const MasteringDisplay& mastering, const io::Cta861Light& cll) {
+  const io::St2086Codes c = io::st2086_codes(mastering);
+  auto* md = reinterpret_cast<AVMasteringDisplayMetadata*>(
+      av_stream_new_side_data(st, AV_PKT_DATA_MASTERING_DISPLAY_METADATA, sizeof(AVMasteringDisplayMetadata)));
+  auto* cl = reinterpret_cast<AVContentLightMetadata*>(
+      av_stream_new_side_data(st, AV_PKT_DATA_CONTENT_LIGHT_LEVEL, sizeof(AVContentLightMetadata)));
+  if (!md || !cl) return make_error("video.mux", "out of memory");
+  std::memset(md, 0, sizeof *md);
+  const std::array<std::array<std::uint16_t, 2>, 3> rgb{c.red, c.green, c.blue};
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 2; ++k) md->display_primaries[i][k] = av_make_q(rgb[i][k], 50000);
+  md->white_point[0] = av_make_q(c.white[0], 50000);
+  md->white_point[1] = av_make_q(c.white[1], 50000);
+  md->max_luminance = av_make_q(static_cast<int>(c.max_luminance), 10000);
+  md->min_luminance = av_make_q(static_cast<int>(c.min_luminance), 10000);
+  md->has_primaries = md->has_luminance = 1;
+  cl->MaxCLL = cll.max_cll;
+  cl->MaxFALL = cll.max_fall;
+  return {};
+}
+
+}  // namespace
+
+Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Light& cll) {
+  const char* format = settings.container == Container::mp4 ? "mp4" : "matroska";
+  if (const int rc = avformat_alloc_output_context2(&m.ctx, nullptr, format, output_temp.c_str()); rc < 0)
+    return av_fail("video.mux", fmt::format("no {} muxer", format), rc);
+  m.ctx->flags |= AVFMT_FLAG_BITEXACT;  // no tool versions or times: the same frames give the same bytes
+  AVStream* st = avformat_new_stream(m.ctx, nullptr);
+  if (!st) return make_error("video.mux", "out of memory");
+  if (const int rc = avcodec_parameters_from_context(st->codecpar, enc.get()); rc < 0)
+    return av_fail("video.mux", "stream parameters", rc);
+  // hvc1: parameter sets only in the sample entry (what Apple players require).
+  if (settings.codec == Codec::hevc && settings.container == Container::mp4) st->codecpar->codec_tag = MKTAG('h', 'v', 'c', '1');
+  st->time_base = enc->time_base;
+  st->avg_frame_rate = enc->framerate;
+  if (is_hdr(stream.target.mode))
+    if (auto ok = add_static_side_data(st, stream.mastering, cll); !ok) return ok.error();
+  if (const int rc = avio_open(&m.ctx->pb, output_temp.c_str(), AVIO_FLAG_WRITE); rc < 0)
+    return av_fail("io.write", fmt::format("cannot write {}", output_temp.string()), rc);
+  AVDictionary* opts = nullptr;
+  // moov first, so a player (or a browser fetching GET /v1/jobs/{id}/result) starts at once.
+  if (settings.container == Container::mp4) av_dict_set(&opts, "movflags", "+faststart", 0);
+  const int rc = avformat_write_header(m.ctx, &opts);
+  av_dict_free(&opts);
+  if (rc < 0) return av_fail("video.mux", fmt::format("cannot start the {} file", format), rc);
+  return st;
+}
+
+// Every spooled packet, with its metadata inserted, into the muxer.
+Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta,
+                                                const io::Cta861Light& cll) {
+  PacketPtr out(av_packet_alloc());
+  if (!out) return make_error("video.mux", "out of memory");
+  for (int n = 0;; ++n) {
+    SpoolRecord r;
+    if (std::fread(&r, sizeof r, 1, spool.get()) != 1) return {};
+    std::vector<std::uint8_t> data(r.size);
+    if (std::fread(data.data(), 1, data.size(), spool.get()) != data.size())
+      return make_error("io.read", fmt::format("spool file {} is truncated at packet {}", spool_path.string(), n));
+    auto bytes = with_metadata(r, std::move(data), meta, cll);
+    if (!bytes) return bytes.error();
+    if (const int rc = av_new_packet(out.get(), static_cast<int>(bytes->size())); rc < 0) return av_fail("video.mux", "packet", rc);
+    std::memcpy(out->data, bytes->data(), bytes->size());
+    out->pts = r.pts, out->dts = r.dts, out->duration = r.duration, out->flags = r.flags;
+    out->stream_index = 0;
+    av_packet_rescale_ts(out.get(), enc->time_base, st->time_base);
+    if (const int rc = av_write_frame(m.ctx, out.get()); rc < 0) return av_fail("video.mux", fmt::format("packet {}", n), rc);
+    av_packet_unref(out.get());
+  }
+}
+
+VideoResult SequenceWriter::Impl::result(const SequenceMetadata* meta, const io::Cta861Light& cll) const {
+  VideoResult v;
+  v.path = output;
+  v.codec = std::string(to_string(settings.codec));
+  v.encoder = config.encoder;
+  v.profile = config.profile;
+  v.pixel_format = config.bits == 10 ? "yuv420p10le" : "yuv420p";
+  v.colour_primaries = config.tags.primaries;
+  v.transfer_characteristics = config.tags.transfer;
+  v.matrix_coefficients = config.matrix;
+  v.range = std::string(to_string(settings.range));
+  v.frames = frames;
+  std::error_code ec;
+  v.bytes = fs::file_size(output, ec);
+  if (is_hdr(stream.target.mode)) v.content_light = ContentLightLevel{static_cast<double>(cll.max_cll), static_cast<double>(cll.max_fall)};
+  v.hdr10plus = meta && settings.dynamic_metadata && meta->has_dynamic_metadata() && settings.codec != Codec::h264;
+  return v;
+}
+
+Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
+  if (frames == 0) return make_error("video.empty", "a video needs at least one frame", "frames");
+  if (meta && meta->frame_count() != frames)
+    return make_error("video.metadata", fmt::format("metadata covers {} frames, the video has {}", meta->frame_count(), frames));
+  flushed = true;
+  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
+  if (auto ok = spool_packets(); !ok) return ok.error();
+  if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
+    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+
+  const io::Cta861Light cll = io::cta861_light(meta ? meta->content_light() : frames_light, stream.mastering);
+  auto fd = io::create_temp_file(output, output_temp);
+  if (!fd) return fd.error();
+  ::close(*fd);
+  {
+    Muxer m;
+    auto st = start_muxer(m, cll);
+    if (!st) return st.error();
+    if (auto ok = copy_packets(m, *st, meta, cll); !ok) return ok.error();
+    if (const int rc = av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
+    if (const int rc = avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
+  }
+  spool.reset();
+  ::unlink(spool_path.c_str());
+  spool_path.clear();
+  if (auto ok = fsync_path(output_temp); !ok) return ok.error();
+  if (::rename(output_temp.c_str(), output.c_str()) != 0)
+    return make_error("io.write", fmt::format("cannot rename {} to {}: {}", output_temp.string(), output.string(), std::strerror(errno)));
+  output_temp.clear();
+  return result(meta, cll);
+}
+
+}  // namespace hdrd::video
