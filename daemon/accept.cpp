@@ -83,13 +83,13 @@ Result<void> accepts_json(const std::string* accept) {
                     "dump");
 }
 
-Result<job::Output> negotiate_output(const std::string* accept, Mode mode) {
+Result<job::Output> negotiate_output(const std::string* accept, Mode mode, job::Source source) {
   const auto ranges = ranges_of(accept);
   std::optional<job::Output> best;
   double best_q = 0;
   std::string offered;
   for (const auto& o : job::outputs()) {
-    if (!o.reply || !job::applies(o, job::Source::render, mode)) continue;
+    if (!o.reply || !job::applies(o, source, mode)) continue;
     offered += (offered.empty() ? "" : ", ") + std::string(o.content_type);
     const double q = quality(ranges, o.content_type);
     if (q > best_q) best_q = q, best = o.id;

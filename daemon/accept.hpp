@@ -14,7 +14,7 @@ namespace hdrd::daemon {
 // q-values honoured, q=0 refuses, the most specific range wins; ties go to the table's
 // order (the mode's natural image format first). Without Accept (or */*): PNG, or EXR for
 // scrgb, which has no PNG form. Error request.not_acceptable (406).
-Result<job::Output> negotiate_output(const std::string* accept, Mode mode);
+Result<job::Output> negotiate_output(const std::string* accept, Mode mode, job::Source source = job::Source::render);
 
 // A dump answers its sidecar: Accept must allow application/json.
 Result<void> accepts_json(const std::string* accept);

@@ -133,7 +133,7 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
   if (!made) return responder->reply(Reply::error(made.error()));
   st->job = std::move(*made);
   if (!dump) {
-    auto output = negotiate_output(http.header("accept"), st->job->target().mode);
+    auto output = negotiate_output(http.header("accept"), st->job->target().mode, st->job->request().source);
     if (!output) return responder->reply(Reply::error(output.error()));
     if (auto ok = st->job->set_outputs({*output}); !ok) return responder->reply(Reply::error(ok.error()));
     st->reply = *output;

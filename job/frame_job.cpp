@@ -11,6 +11,7 @@
 #include "encode/grade/grade.hpp"
 #include "encode/grade/lut.hpp"
 #include "encode/io/io.hpp"
+#include "encode/io/stills.hpp"
 #include "encode/pipeline.hpp"
 #include "job/build.hpp"
 #include "patterns/patterns.hpp"
@@ -27,6 +28,67 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 Error cancelled() { return make_error("request.cancelled", "cancelled"); }
 
+struct StillOptions {
+  io::AvifOptions avif;
+  io::JxlOptions jxl;
+  io::JpegOptions jpeg;
+  io::GainMapOptions gain_map;
+};
+
+io::AvifOptions avif_options(const FrameRequest& r, int threads) {
+  io::AvifOptions o;
+  if (!r.is_null("quality")) o.quality = static_cast<int>(r.integer("quality"));
+  o.lossless = r.boolean("lossless");
+  if (!r.is_null("avif.bits")) o.bits = static_cast<int>(r.integer("avif.bits"));
+  if (!r.is_null("avif.range")) o.range = parse_range(r.text("avif.range"));
+  if (!r.is_null("avif.matrix")) o.matrix = r.text("avif.matrix") == "rgb" ? io::AvifMatrix::rgb : io::AvifMatrix::ycbcr;
+  if (!r.is_null("avif.chroma")) {
+    const std::string c = r.text("avif.chroma");
+    o.chroma = c == "444" ? io::ChromaSubsampling::yuv444
+               : c == "422" ? io::ChromaSubsampling::yuv422 : io::ChromaSubsampling::yuv420;
+  }
+  if (!r.is_null("avif.speed")) o.speed = static_cast<int>(r.integer("avif.speed"));
+  o.threads = threads;
+  return o;
+}
+
+io::JxlOptions jxl_options(const FrameRequest& r, int threads) {
+  io::JxlOptions o;
+  if (!r.is_null("quality")) o.quality = static_cast<int>(r.integer("quality"));
+  o.lossless = r.boolean("lossless");
+  o.effort = static_cast<int>(r.integer("jxl.effort"));
+  o.threads = threads;
+  return o;
+}
+
+io::JpegOptions jpeg_options(const FrameRequest& r) {
+  io::JpegOptions o;
+  if (!r.is_null("quality")) o.quality = static_cast<int>(r.integer("quality"));
+  o.subsample_chroma = !r.boolean("jpeg.chroma_444");
+  return o;
+}
+
+io::GainMapOptions gain_map_options(const FrameRequest& r) {
+  io::GainMapOptions o;
+  o.primary = jpeg_options(r);
+  o.gain_map_quality = static_cast<int>(r.integer("gainmap.quality"));
+  o.gain_map_scale = static_cast<int>(r.integer("gainmap.scale"));
+  o.channels = r.text("gainmap.channels") == "luminance" ? io::GainMapChannels::luminance : io::GainMapChannels::rgb;
+  o.gamma = r.number("gainmap.gamma");
+  o.offset_sdr = r.number("gainmap.offset_sdr");
+  o.offset_hdr = r.number("gainmap.offset_hdr");
+  return o;
+}
+
+// The stills' options, read when the job is made so that every setting is checked (and
+// used) whatever the outputs; the gain map's only where the source has scene light.
+StillOptions still_options(const FrameRequest& r, int threads) {
+  StillOptions o{avif_options(r, threads), jxl_options(r, threads), jpeg_options(r), {}};
+  if (r.source != Source::pattern) o.gain_map = gain_map_options(r);
+  return o;
+}
+
+
 }  // namespace
 
 struct FrameJob::State {
@@ -42,6 +104,11 @@ struct FrameJob::State {
   std::optional<PreparedPipeline> prepared;
   std::optional<EncodedFrame> gpu_frame;
   std::optional<Image> scene_frame;  // the full scene-referred frame, when read back
+  // finish stage: the scene light the CPU encoded (the SDR rendition encodes it again)
+  std::optional<Image> exr_image;
+  SceneInput cpu_input;
+  std::optional<EncodedFrame> sdr_frame;
+  StillOptions stills;
   nlohmann::json render_info;
   double illuminance_lux = 0;
 
@@ -98,6 +165,7 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
     return make_error("request.value", "an encode request needs an EXR", "image");
   if (request.source == Source::pattern)
     if (auto ok = check_pattern_mode(request, s->target); !ok) return ok.error();
+  s->stills = still_options(request, options.threads);
   s->request = std::move(request);
   s->outputs = std::move(*outputs);
   s->options = std::move(options);
@@ -198,13 +266,17 @@ Result<EncodedFrame> finish_render(FrameJob::State& st) {
   if (!st.prepared) return make_error("internal", "a render request finished before it was rendered");
   nlohmann::json render = st.render_info;
   render["encoder"] = st.gpu_frame ? "gpu" : "cpu";
+  if (st.scene_frame) {
+    st.cpu_input.image = &*st.scene_frame;
+    st.cpu_input.units = InputUnits::absolute;
+  }
   if (st.gpu_frame) {
     EncodedFrame f = std::move(*st.gpu_frame);
     st.gpu_frame.reset();
     f.settings["render"] = render;
     return f;
   }
-  SceneInput in;
+  SceneInput& in = st.cpu_input;
   in.image = &*st.scene_frame;
   in.units = InputUnits::absolute;
   const auto t0 = Clock::now();
@@ -238,9 +310,12 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   settings->png_samples = st.wants(&OutputInfo::needs_signal16);
   settings->exposure.mode = exposure_mode(st.request, st.request.optional_number("exposure.illuminance_lux").has_value());
   const auto t1 = Clock::now();
-  auto f = encode_frame(in, *settings);
+  auto prepared = prepare_pipeline(in, *settings);
+  if (!prepared) return prepared.error();
+  auto f = encode_prepared(in, *prepared);
   if (!f) return f.error();
   st.timings["encode"] = ms_since(t1);
+  st.prepared = std::move(*prepared);
   f->settings["input"] = {{"name", st.input.name.empty() ? st.input.path.string() : st.input.name},
                           {"units", to_string(in.units)},
                           {"white_luminance_nits", in.white_luminance_nits},
@@ -249,6 +324,9 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
                           {"width", exr->image.width},
                           {"height", exr->image.height}};
   if (!st.input.bytes.empty()) f->settings["input"]["bytes"] = st.input.bytes.size();
+  st.exr_image = std::move(exr->image);
+  st.cpu_input = in;
+  st.cpu_input.image = &*st.exr_image;
   return f;
 }
 
@@ -290,6 +368,31 @@ nlohmann::json resolved_request(const FrameRequest& r, const EncodedFrame& f) {
   return j;
 }
 
+// The SDR rendition of the same frame, the gain-map JPEG's primary image: the scene light
+// encoded for sRGB SDR (the mode's REFERENCE.md §1.8 levels, full range, 8-bit) at the
+// exposure the HDR frame was metered at, so that the map relates two renditions of one
+// exposure (ISO 21496-1 §5). Manual exposure whose scale is the metered one: for manual
+// metering scene_scale = unit * gain / paper white (encode/pipeline.cpp).
+Result<EncodedFrame> sdr_rendition(const SceneInput& in, const PreparedPipeline& hdr) {
+  LevelSettings said;
+  said.range = Range::full;
+  said.sdr_curve = SdrCurve::srgb;
+  said.bits = 8;
+  auto t = resolve_target(Mode::sdr, {}, said);
+  if (!t) return t.error();
+  EncodeSettings s = hdr.settings;
+  s.target = *t;
+  s.keep_display_nits = false;
+  s.png_samples = false;
+  const double unit_nits = in.units == InputUnits::absolute ? in.white_luminance_nits : t->paper_white_nits;
+  s.exposure = exposure::Settings{};
+  s.exposure.mode = exposure::Mode::manual;
+  s.exposure.gain = hdr.scene_scale * t->paper_white_nits / unit_nits;
+  auto p = prepare_pipeline(in, s);
+  if (!p) return p.error();
+  return encode_prepared(in, *p);
+}
+
 Result<std::vector<std::uint8_t>> output_bytes(Output o, const FrameJob::State& st, const EncodedFrame& frame) {
   switch (o) {
     case Output::png: return io::encode_png(frame);
@@ -306,6 +409,15 @@ Result<std::vector<std::uint8_t>> output_bytes(Output o, const FrameJob::State& 
       return io::encode_exr(*st.scene_frame, ex);
     }
     case Output::heatmap: return patterns::frame_heatmap(frame).png();
+    case Output::avif: return io::encode_avif(frame, st.stills.avif);
+    case Output::jxl: return io::encode_jxl(frame, st.stills.jxl);
+    case Output::jpeg: return io::encode_jpeg(frame, st.stills.jpeg);
+    case Output::jpeg_gainmap: {
+      if (!st.sdr_frame) return make_error("internal", "the SDR rendition was not encoded");
+      auto j = io::encode_jpeg_gainmap(*st.sdr_frame, frame, st.stills.gain_map);
+      if (!j) return j.error();
+      return std::move(j->bytes);
+    }
   }
   return make_error("internal", "unknown output");
 }
@@ -323,6 +435,14 @@ Result<FrameResult> FrameJob::finish() {
   }
   if (!frame) return frame.error();
   if (st.stopped()) return cancelled();
+  if (st.wants(&OutputInfo::needs_sdr_rendition)) {
+    if (!st.prepared || !st.cpu_input.image) return make_error("internal", "no scene light for the SDR rendition");
+    const auto t1 = Clock::now();
+    auto sdr = sdr_rendition(st.cpu_input, *st.prepared);
+    if (!sdr) return sdr.error();
+    st.sdr_frame = std::move(*sdr);
+    st.timings["encode_sdr_rendition"] = ms_since(t1);
+  }
   FrameResult result;
   result.encoder = frame->settings.contains("render") ? frame->settings["render"].value("encoder", "cpu") : "cpu";
   // Serialise the outputs concurrently (each writer is single-threaded), all before any is

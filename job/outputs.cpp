@@ -8,24 +8,36 @@ namespace hdrd::job {
 namespace {
 
 bool has_png(Mode m) { return mode_info(m).png; }
+bool is_sdr_srgb(Mode m) { return m == Mode::sdr; }
+bool has_gain_map(Mode m) { return m == Mode::hdr10 || m == Mode::hlg; }
 
 const OutputInfo kOutputs[] = {
     {Output::png, "png", ".png", "image/png",
      "16-bit RGB with cICP/mDCV/cLLI (HDR, 10-bit SDR), 8-bit RGB (8-bit SDR)", kAllSources, true, true, false, true,
-     false, &has_png},
+     false, false, &has_png},
     {Output::exr, "exr", ".exr", "image/x-exr", "display-referred linear light, half float, container primaries",
-     kAllSources, true, true, true, false, false, nullptr},
+     kAllSources, true, true, true, false, false, false, nullptr},
     {Output::raw, "raw", ".raw", "application/octet-stream", "the DRM scan-out buffer (the sidecar says its format)",
-     kAllSources, true, true, false, false, false, nullptr},
+     kAllSources, true, true, false, false, false, false, nullptr},
     {Output::scene_exr, "scene-exr", ".scene.exr", "image/x-exr",
      "a render's scene-referred light: float32, linear Rec.709, absolute cd/m2", kRender, false, true, false, false,
-     true, nullptr},
+     true, false, nullptr},
     {Output::heatmap, "heatmap", ".heatmap.png", "image/png",
      "false colour of the display cd/m2 decoded from the codes, with a legend", kAllSources, false, false, false, false,
-     false, nullptr},
+     false, false, nullptr},
+    {Output::avif, "avif", ".avif", "image/avif",
+     "AVIF (AV1, libaom): 8/10/12-bit, lossless or lossy, colr nclx + clli/mdcv (docs/dump-format.md)", kAllSources,
+     true, false, false, true, false, false, &has_png},
+    {Output::jxl, "jxl", ".jxl", "image/jxl", "JPEG XL (libjxl): PQ/HLG/SDR colour encoding, intensity_target = peak",
+     kAllSources, true, false, false, true, false, false, &has_png},
+    {Output::jpeg, "jpeg", ".jpg", "image/jpeg", "8-bit sRGB JPEG of an SDR frame (sdr mode, srgb, full range)",
+     kAllSources, true, false, false, false, false, false, &is_sdr_srgb},
+    {Output::jpeg_gainmap, "jpeg-gainmap", ".jpg", "image/jpeg",
+     "SDR JPEG + gain map to the HDR frame (ISO 21496-1, Ultra HDR XMP, MPF); hdr10 and hlg", kSceneReferred, true,
+     false, false, false, true, true, &has_gain_map},
 };
 
-constexpr std::string_view kNames[] = {"png", "exr", "raw", "scene-exr", "heatmap"};
+constexpr std::string_view kNames[] = {"png", "exr", "raw", "scene-exr", "heatmap", "avif", "jxl", "jpeg", "jpeg-gainmap"};
 
 }  // namespace
 

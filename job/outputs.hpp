@@ -15,7 +15,7 @@
 
 namespace hdrd::job {
 
-enum class Output { png, exr, raw, scene_exr, heatmap };
+enum class Output { png, exr, raw, scene_exr, heatmap, avif, jxl, jpeg, jpeg_gainmap };
 
 struct OutputInfo {
   Output id;
@@ -29,6 +29,7 @@ struct OutputInfo {
   bool needs_display_nits;        // the encoder keeps display light (EncodedFrame::display_nits)
   bool needs_signal16;            // the encoder keeps 16-bit PNG samples
   bool needs_scene_frame;         // the renderer's full scene-referred frame
+  bool needs_sdr_rendition;       // the SDR rendition of the same frame (the gain map's primary image)
   bool (*for_mode)(Mode);         // null: every mode
 };
 

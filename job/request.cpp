@@ -119,7 +119,8 @@ class Parser {
         if (!std::isfinite(d) || d != std::floor(d))
           fail("request.type", fmt::format("{}: expected an integer, got {}", shown(path), v.dump()), path);
         if (d < s.min || d > s.max)
-          fail("request.value", fmt::format("{}: {} is outside [{:g}, {:g}]", shown(path), v.dump(), s.min, s.max), path);
+          fail(d > s.max && s.size_limit ? "request.limit" : "request.value",
+               fmt::format("{}: {:.0f} is outside [{:g}, {:g}]", shown(path), d, s.min, s.max), path);
         return static_cast<std::int64_t>(d);
       }
       case Type::boolean:
@@ -501,8 +502,10 @@ LevelSettings request_levels(const FrameRequest& r) {
   l.paper_white_nits = r.optional_number("display.paper_white_nits");
   l.ui_white_nits = r.optional_number("display.ui_white_nits");
   l.sdr_white_nits = r.optional_number("display.sdr_white_nits");
-  if (r.has("display.range")) l.range = parse_range(r.text("display.range"));
-  if (r.has("display.sdr_curve")) l.sdr_curve = parse_sdr_curve(r.text("display.sdr_curve"));
+  // Range and SDR curve have static defaults, but only a given one overrides the display's.
+  const std::string range = r.text("display.range"), sdr_curve = r.text("display.sdr_curve");
+  if (r.has("display.range")) l.range = parse_range(range);
+  if (r.has("display.sdr_curve")) l.sdr_curve = parse_sdr_curve(sdr_curve);
   if (!r.is_null("display.bits")) l.bits = static_cast<int>(r.integer("display.bits"));
   return l;
 }

@@ -62,6 +62,7 @@ struct Setting {
   std::string_view header = "";                 // X-Hdrd-* header carrying the resolved value
   Reach reach = Reach::everywhere;
   std::size_t max_length = 256;                 // text, path
+  bool size_limit = false;                      // above max is request.limit (a size), not request.value
 
   nlohmann::json default_value() const;         // parsed default_json
   std::string default_text() const;             // "1000", "the mode's (...)", for docs

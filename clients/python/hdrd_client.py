@@ -176,13 +176,13 @@ class HdrdClient:
         """POST /v1/render with "dump": true: returns the sidecar."""
         return self.render(dict(request, dump=True))
 
-    def pattern(self, name, params=None, display=None, accept="image/png", **fields):
+    def pattern(self, pattern, params=None, display=None, accept="image/png", **fields):
         """POST /v1/pattern: a standard test pattern (bt2111, pq-ramp, window, near-black,
         clipping, sdr-grey; capabilities()["patterns"] lists them with their parameters).
         `params` holds the pattern's parameters ({"level_nits": 1000, "area_percent": 10}),
         `display` the display target as for render; other request fields (width, height,
         dump, name, formats) as keyword arguments."""
-        body = {"pattern": name, **fields}
+        body = {"pattern": pattern, **fields}
         if params:
             body["params"] = params
         if display is not None:

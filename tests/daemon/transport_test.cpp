@@ -81,6 +81,17 @@ TEST(Accept, NegotiatesTheFrameFormat) {
   EXPECT_EQ(*pick(nullptr, Mode::scrgb), Output::exr) << "scrgb has no PNG form";
   EXPECT_EQ(pick("image/png", Mode::scrgb).error().code, "request.not_acceptable");
   EXPECT_EQ(pick("text/html").error().code, "request.not_acceptable");
+  // Stills: image/jpeg is the gain-map JPEG in HDR modes (a render or an EXR: they have
+  // scene light for the SDR rendition), the plain JPEG in sdr.
+  EXPECT_EQ(*pick("image/avif"), Output::avif);
+  EXPECT_EQ(*pick("image/jxl"), Output::jxl);
+  EXPECT_EQ(*pick("image/jpeg"), Output::jpeg_gainmap);
+  EXPECT_EQ(*pick("image/jpeg", Mode::hlg), Output::jpeg_gainmap);
+  EXPECT_EQ(*pick("image/jpeg", Mode::sdr), Output::jpeg);
+  EXPECT_EQ(pick("image/avif", Mode::scrgb).error().code, "request.not_acceptable");
+  std::string jpeg = "image/jpeg";
+  EXPECT_EQ(negotiate_output(&jpeg, Mode::hdr10, job::Source::pattern).error().code, "request.not_acceptable")
+      << "a pattern has no scene light for a gain map";
   std::string a = "image/png, application/json";
   EXPECT_TRUE(accepts_json(&a).ok());
   a = "image/png";

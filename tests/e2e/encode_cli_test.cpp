@@ -111,8 +111,9 @@ TEST(EncodeCli, ScrgbSdrAndHlgMatchIndependentFormulas) {
         for (int j = 0; j < 3; ++j) rel2020[k] += kBt2087[k][j] * img.rgba[i * 4 + j];
       }
       // clip happens per channel in Rec.2020; back in Rec.709 only unclipped channels are exact.
-      if (std::max({rel2020[0], rel2020[1], rel2020[2]}) * 203 < 1000)
+      if (std::max({rel2020[0], rel2020[1], rel2020[2]}) * 203 < 1000) {
         EXPECT_NEAR(v, img.rgba[i * 4 + c] * 203 / 80.0, 2e-3 * v + 1e-4) << i;
+      }
     }
   // SDR: sRGB of min(nits / 100, 1) (paper white = peak = 100), 8-bit, XRGB8888.
   ASSERT_EQ(run_command(base + " --mode sdr").exit_code, 0);

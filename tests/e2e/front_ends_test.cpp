@@ -144,7 +144,7 @@ class FrontEnds : public ::testing::Test {
   static void SetUpTestSuite() {
     daemon_ = new DaemonProcess();
     ASSERT_TRUE(daemon_->ready()) << daemon_->log();
-    if (auto gltf = fixture("gltf/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb"))
+    if (auto gltf = fixture("fixtures/gltf/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb"))
       fs::copy_file(*gltf, daemon_->assets() / "MetalRoughSpheresNoTextures.glb");
   }
   static void TearDownTestSuite() {
@@ -253,7 +253,7 @@ TEST_F(FrontEnds, SameRequestSameFrameEverywhere) {
   for (const auto& c : kCases) {
     fs::path exr;
     if (*c.exr) {
-      auto f = fixture(std::string("exr/") + c.exr);
+      auto f = fixture(std::string("fixtures/exr/") + c.exr);
       if (!f) continue;  // counted below: the whole matrix needs ../shared
       exr = *f;
     }

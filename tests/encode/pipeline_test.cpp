@@ -187,6 +187,7 @@ struct Case {
   Mode mode;
   const char* curve;
 };
+void PrintTo(const Case& c, std::ostream* os) { *os << to_string(c.mode) << " " << c.curve; }
 class FastVsReference : public ::testing::TestWithParam<Case> {};
 
 TEST_P(FastVsReference, WithinOneCodeAndRarelyOff) {

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <fmt/format.h>
+
 #include "encode/io/io.hpp"
 #include "job/build.hpp"
 #include "job/frame_job.hpp"
@@ -170,6 +172,85 @@ TEST(FrameJob, WritesAllOrNothing) {
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, "io.write");
   EXPECT_FALSE(fs::exists(in.dir / "missing"));
+}
+
+// The shareable stills come from the one frame: a gain-map JPEG's primary image is the SDR
+// rendition, i.e. exactly what an sdr request for the same source makes (djpeg, an
+// independent decoder, reads only the primary image of the MPF file).
+TEST(FrameJob, GainMapPrimaryIsTheSdrRequestsFrame) {
+  if (testing::run_command("command -v djpeg >/dev/null").exit_code != 0)
+    GTEST_SKIP() << "djpeg not installed (Debian package libjpeg-turbo-progs)";
+  Inputs in;
+  auto make = [&](const char* body, const char* base) {
+    auto r = parse_request_json(json::parse(body), cli_context(Source::encode));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    EncodeInput input;
+    input.path = in.exr;
+    auto job = FrameJob::create(std::move(*r), {}, input);
+    EXPECT_TRUE(job.ok()) << job.error().message;
+    auto result = run_frame_job(**job);
+    EXPECT_TRUE(result.ok()) << result.error().message;
+    auto files = write_outputs(*result, in.dir / base);
+    EXPECT_TRUE(files.ok()) << files.error().message;
+    return *files;
+  };
+  const auto hdr = make(R"({"display":{"mode":"hdr10"},"formats":["jpeg-gainmap","avif","jxl"]})", "hdr");
+  const auto sdr = make(R"({"display":{"mode":"sdr"},"formats":["jpeg"]})", "sdr");
+  EXPECT_EQ(hdr.at("jpeg-gainmap"), (in.dir / "hdr.jpg").string());
+  const auto ppm = [&](const std::string& jpg) {
+    const auto r = testing::run_command("djpeg -pnm '" + jpg + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  };
+  const std::string a = ppm(hdr.at("jpeg-gainmap")), b = ppm(sdr.at("jpeg"));
+  EXPECT_GT(a.size(), 16u * 8 * 3);
+  EXPECT_EQ(a, b) << "the gain-map JPEG's primary image is the SDR request's JPEG";
+  const std::string avif = testing::read_file(hdr.at("avif")), jxl = testing::read_file(hdr.at("jxl"));
+  EXPECT_EQ(avif.substr(4, 8), "ftypavif");
+  EXPECT_TRUE(jxl.substr(0, 2) == "\xff\x0a" || jxl.substr(4, 4) == "JXL ") << "a JPEG XL codestream or container";
+  const json sidecar = json::parse(testing::read_file(in.dir / "hdr.json"));
+  EXPECT_EQ(sidecar["files"]["jpeg-gainmap"], "hdr.jpg");
+  EXPECT_EQ(sidecar["files"]["avif"], "hdr.avif");
+}
+
+TEST(FrameJob, StillsAreRefusedWhereTheModeHasNoForm) {
+  auto create = [](const char* body) {
+    auto r = parse_request_json(json::parse(body), cli_context(Source::pattern));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    return FrameJob::create(std::move(*r), {});
+  };
+  auto scrgb = create(R"({"pattern":"window","display":{"mode":"scrgb"},"formats":["avif"]})");
+  ASSERT_FALSE(scrgb.ok());
+  EXPECT_NE(scrgb.error().message.find("scrgb has no avif form"), std::string::npos) << scrgb.error().message;
+  auto sdr_map = create(R"({"pattern":"window","display":{"mode":"sdr"},"formats":["jpeg-gainmap"]})");
+  ASSERT_FALSE(sdr_map.ok());
+  auto pattern_map = create(R"({"pattern":"window","display":{"mode":"hdr10"},"formats":["jpeg-gainmap"]})");
+  ASSERT_FALSE(pattern_map.ok()) << "a pattern has no scene light for an SDR rendition";
+  EXPECT_NE(pattern_map.error().message.find("not made by pattern requests"), std::string::npos)
+      << pattern_map.error().message;
+}
+
+// A render encoded on the GPU still gets its gain map: the scene light is read back for the
+// SDR rendition.
+TEST(FrameJob, RenderGainMap) {
+  auto renderer = shading::Renderer::create();
+  if (!renderer) GTEST_SKIP() << "no GL renderer: " << renderer.error().message;
+  auto r = parse_request_json(json::parse(R"({"width":32,"height":18,"samples":1,"display":{"mode":"hlg"},
+                                               "formats":["jpeg-gainmap"],"gainmap":{"channels":"luminance","scale":2}})"),
+                              cli_context(Source::render));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  auto job = FrameJob::create(std::move(*r), {});
+  ASSERT_TRUE(job.ok()) << job.error().message;
+  auto result = run_frame_job(**job, renderer->get());
+  ASSERT_TRUE(result.ok()) << result.error().message;
+  ASSERT_EQ(result->files.size(), 1u);
+  const auto& bytes = result->files[0].bytes;
+  ASSERT_GT(bytes.size(), 4u);
+  EXPECT_EQ(bytes[0], 0xff);
+  EXPECT_EQ(bytes[1], 0xd8);
+  const std::string text(bytes.begin(), bytes.end());
+  EXPECT_NE(text.find("hdrgm:Version"), std::string::npos) << "Ultra HDR XMP";
+  EXPECT_NE(text.find("urn:iso:std:iso:ts:21496:-1"), std::string::npos) << "ISO 21496-1 metadata";
 }
 
 }  // namespace

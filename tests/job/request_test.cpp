@@ -60,6 +60,9 @@ struct ModeDefaults {
   const char* mode;
   double peak, black, paper;
 };
+void PrintTo(const ModeDefaults& m, std::ostream* os) {
+  *os << m.mode << " peak " << m.peak << " black " << m.black << " paper white " << m.paper;
+}
 class ResolverModeDefaults : public ::testing::TestWithParam<ModeDefaults> {};
 
 TEST_P(ResolverModeDefaults, FollowReferenceTable) {
@@ -124,6 +127,7 @@ struct Bad {
   const char* code;
   const char* field;
 };
+void PrintTo(const Bad& b, std::ostream* os) { *os << b.name << " -> " << b.code; }
 class RequestRejects : public ::testing::TestWithParam<Bad> {};
 
 TEST_P(RequestRejects, WithCodeAndField) {
@@ -145,10 +149,10 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"width_fraction", R"({"width":25.5})", "request.type", "width"},
         Bad{"width_zero", R"({"width":0})", "request.value", "width"},
         Bad{"width_over_limit", R"({"width":10000})", "request.limit", "width"},
-        Bad{"width_huge", R"({"width":1e300})", "request.value", "width"},
-        Bad{"width_unsigned_max", R"({"width":18446744073709551615})", "request.value", "width"},
+        Bad{"width_huge", R"({"width":1e300})", "request.limit", "width"},
+        Bad{"width_unsigned_max", R"({"width":18446744073709551615})", "request.limit", "width"},
         Bad{"number_overflow", R"({"width":1e400})", "request.value", ""},
-        Bad{"samples_over_table", R"({"samples":100})", "request.value", "samples"},
+        Bad{"samples_over_table", R"({"samples":100})", "request.limit", "samples"},
         Bad{"pixels_over_limit", R"({"width":7680,"height":4321})", "request.limit", "height"},
         Bad{"bits_3", R"({"display":{"bits":3}})", "request.value", "display.bits"},
         Bad{"sdr_12_bits", R"({"display":{"mode":"sdr","bits":12}})", "request.value", "display.bits"},

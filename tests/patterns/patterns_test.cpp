@@ -133,7 +133,7 @@ TEST(Clipping, DetailVanishesExactlyAtThePeak) {
     const int background = code_at(*f, 2, 2);
     for (int i = 0; i < 9; ++i) {
       const int c = code_at(*f, 50 + 100 * i, 80);
-      if (squares[i].get<double>() >= peak) EXPECT_EQ(c, background) << squares[i];
+      if (squares[i].get<double>() >= peak) { EXPECT_EQ(c, background) << squares[i]; }
       else EXPECT_LT(c, background) << squares[i];
     }
   }

@@ -141,9 +141,10 @@ TEST(PlotCli, CurvesSvgAndPngAndHeatmap) {
   ASSERT_EQ(png.exit_code, 0) << png.err;
   EXPECT_TRUE(io::read_png_info(dir / "f.png"));
   HDRD_REQUIRE_FIXTURE(exr, "fixtures/exr/GrayRampsHorizontal.exr");
-  auto heat = testing::run_command(bin + " plot heatmap " + exr.string() + " --mode hdr10 -o " + (dir / "h.png").string());
+  // The heatmap is an output of the frame job (hdrd encode --format heatmap), not a plot.
+  auto heat = testing::run_command(bin + " encode " + exr.string() + " --mode hdr10 --format heatmap -o " + (dir / "h").string());
   ASSERT_EQ(heat.exit_code, 0) << heat.err;
-  EXPECT_TRUE(io::read_png_info(dir / "h.png"));
+  EXPECT_TRUE(io::read_png_info(dir / "h.heatmap.png"));
 }
 
 }  // namespace

@@ -16,6 +16,9 @@ struct Case {
   int bits;
   const char* curve;  // "" = the mode's default
 };
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.scene << " " << to_string(c.mode) << " " << c.bits << "-bit" << (*c.curve ? " " : "") << c.curve;
+}
 
 std::string case_name(const ::testing::TestParamInfo<Case>& info) {
   std::string n = std::string(info.param.scene) + "_" + std::string(to_string(info.param.mode)) + "_" +

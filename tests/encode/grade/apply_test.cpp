@@ -150,7 +150,7 @@ TEST(Apply, MatchesOpenColorIOFileTransform) {
           ASSERT_LE(max_abs_diff({px[4 * i], px[4 * i + 1], px[4 * i + 2]}, want), 1e-5f)
               << path << " colour " << colours[i][0] << " " << colours[i][1] << " " << colours[i][2];
           ASSERT_LE(max_abs_diff(eval(cube, colours[i], interp), want), 1e-5f);
-          if (ours_ocio) ASSERT_LE(max_abs_diff(ours_ocio->apply(colours[i]), want), 1e-7f);
+          if (ours_ocio) { ASSERT_LE(max_abs_diff(ours_ocio->apply(colours[i]), want), 1e-7f); }
           ++compared;
         }
       }

@@ -335,7 +335,7 @@ TEST(Grade, DisplayLookKeepsHueAcrossSdrAndHdr10) {
   s.placement = Placement::display;
   const auto img = hue_test_image();
   // The hue-preserving ICtCp mapper isolates the grade; the default curve is checked too.
-  for (const std::string curve : {std::string("ictcp"), std::string(tonemap::default_curve(Mode::hdr10))}) {
+  for (const std::string& curve : {std::string("ictcp"), std::string(tonemap::default_curve(Mode::hdr10))}) {
     auto sdr_g = load_ok(s, default_target(Mode::sdr).peak_nits);
     auto hdr_g = load_ok(s, default_target(Mode::hdr10).peak_nits);
     const auto sdr = displayed_ictcp(img, Mode::sdr, sdr_g, curve);

@@ -34,6 +34,7 @@ struct AvifCase {
   std::string format, range;
   int primaries, transfer, matrix;
 };
+void PrintTo(const AvifCase& c, std::ostream* os) { *os << c.name; }
 
 std::vector<AvifCase> avif_cases() {
   AvifOptions lossless;

@@ -32,6 +32,7 @@ struct JxlCase {
   std::string colour;  // jxlinfo's "Color space:" line
   std::string depth;   // jxlinfo's first line
 };
+void PrintTo(const JxlCase& c, std::ostream* os) { *os << c.name; }
 
 std::vector<JxlCase> jxl_cases() {
   return {

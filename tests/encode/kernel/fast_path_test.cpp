@@ -27,6 +27,7 @@ struct Case {
   Range range;
   bool half;  // RGBA16F input (the AVX-512 kernel splits it with word permutes), else float
 };
+void PrintTo(const Case& c, std::ostream* os) { *os << to_string(c.range) << (c.half ? " half" : " float"); }
 
 class FusedKernel : public ::testing::TestWithParam<Case> {};
 

@@ -80,6 +80,7 @@ struct PropertyCase {
   std::string curve;
   double peak;
 };
+void PrintTo(const PropertyCase& c, std::ostream* os) { *os << c.curve << " at " << c.peak << " cd/m2"; }
 
 class EveryCurve : public ::testing::TestWithParam<PropertyCase> {};
 

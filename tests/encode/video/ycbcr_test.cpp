@@ -20,6 +20,9 @@ struct Case {
   int bits;
   Range in, out;
 };
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << to_string(c.mode) << " " << c.bits << "-bit " << to_string(c.in) << " to " << to_string(c.out);
+}
 
 std::string case_name(const ::testing::TestParamInfo<Case>& i) {
   std::string m(to_string(i.param.mode));
