@@ -432,7 +432,7 @@ TEST(EnvironmentRender, SunlitAndOvercastSkiesMeterInProportion) {
 
 TEST(EnvironmentRender, GltfWithAnEnvironmentGetsNoDefaultRig) {
   HDRD_REQUIRE_RENDERER(renderer);
-  HDRD_REQUIRE_FIXTURE(glb, "fixtures/gltf/MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb");
+  HDRD_REQUIRE_FIXTURE(glb, "fixtures/gltf/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb");
   hdrd::testing::TempDir dir;
   RenderRequest q;
   q.scene = glb.string();
