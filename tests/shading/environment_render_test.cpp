@@ -478,6 +478,22 @@ TEST(EnvironmentRender, PrefilteredMapsAreKeptBetweenFrames) {
   EXPECT_EQ(third->environment, "b.exr");
 }
 
+TEST(EnvironmentRender, GlesAndDesktopGlAgreeUnderTheSky) {
+  HDRD_REQUIRE_RENDERER(renderer);
+  auto gles = Renderer::create(ContextOptions{Backend::egl, GlFlavor::gles});
+  auto desk = Renderer::create(ContextOptions{Backend::egl, GlFlavor::desktop});
+  if (!gles || !desk) GTEST_SKIP() << "needs both GLES 3.2 and GL 4.5 core";
+  RenderRequest q;
+  q.scene = "material-grid";  // the sky, its sun and shadows, every material
+  q.width = 96;
+  q.height = 54;
+  auto a = (*desk)->render(q);
+  auto b = (*gles)->render(q);
+  ASSERT_TRUE(a.ok() && b.ok()) << (a.ok() ? b.error().message : a.error().message);
+  for (std::size_t i = 0; i < a->scene_nits.rgba.size(); ++i)
+    ASSERT_NEAR(a->scene_nits.rgba[i], b->scene_nits.rgba[i], 2e-3 * std::abs(a->scene_nits.rgba[i]) + 1e-3) << i;
+}
+
 TEST(EnvironmentRender, BadEnvironmentsAreClearErrors) {
   HDRD_REQUIRE_RENDERER(renderer);
   Scene s = spheres({lambert_white()}, {{0, 0, 0}}, front_camera());
