@@ -1,13 +1,22 @@
-// Renderer benchmarks (docs/performance.md): frame time of the material-grid and hdr
-// scenes at 1920x1080 and 3840x2160, readback cost, the GPU encode pass against the
-// render pass, and the peak resident memory after a 4K frame.
+// Renderer benchmarks (docs/performance.md, docs/rendering.md): frame time of the
+// material-grid and hdr scenes at 1920x1080 and 3840x2160, readback cost, the GPU encode
+// pass against the render pass, the peak resident memory after a 4K frame, environment
+// prefiltering (sky and EXR maps of 2K and 4K) and the 1080p frame under environment light
+// against the same frame under a uniform ambient term.
 //   LP_NUM_THREADS=2 build/bench/bench_render --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
+#include <vector>
 
+#include "encode/io/io.hpp"
+#include "shading/environment.hpp"
 #include "shading/gpu_encode.hpp"
 #include "shading/renderer.hpp"
 
@@ -163,6 +172,133 @@ void BM_CpuEncode(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(encode_prepared(in, *prepared));
 }
 BENCHMARK(BM_CpuEncode)->Args({1920, 1080})->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
+
+// ---- Environment light ------------------------------------------------------------------
+
+// An equirectangular EXR (a sky-like gradient with a bright soft window), written once;
+// `variant` moves the window (a different file of the same size).
+std::filesystem::path environment_exr(int width, int variant = 0) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("hdrd_bench_env_" + std::to_string(width) + "_" + std::to_string(variant) + ".exr");
+  if (std::filesystem::exists(path)) return path;
+  Image img(width, width / 2);
+  const Vec3 window = normalize(Vec3{0.6, 0.7, variant ? -0.4 : 0.4});
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const Vec3 d = equirect_direction((x + 0.5) / img.width, (y + 0.5) / img.height);
+      const double w = std::exp(-40 * (1 - dot(d, window)));
+      float* p = img.px(x, y);
+      p[0] = float(300 * (1 + d.y) + 20000 * w), p[1] = float(320 * (1 + d.y) + 20000 * w);
+      p[2] = float(400 * (1 + d.y) + 20000 * w), p[3] = 1;
+    }
+  io::ExrWriteOptions o;
+  o.half = true;
+  (void)io::write_exr(path, img, o);
+  return path;
+}
+
+EnvironmentSpec bench_environment(int kind, int variant = 0) {
+  EnvironmentSpec e;
+  if (kind == 0) {
+    e.sky = SkyParams{};
+    e.sky->sun_elevation_deg = variant ? 30 : 45;
+  } else {
+    e.file = environment_exr(kind == 1 ? 2048 : 4096, variant);
+  }
+  return e;
+}
+
+// What a new environment costs (RenderResult::environment_ms: load or generate, the CPU
+// irradiance, upload, the cube and its GGX prefiltering), alternating two so that every
+// frame rebuilds; the 64x64 frame itself is negligible. kind: 0 sky, 1 EXR 2048x1024,
+// 2 EXR 4096x2048.
+void BM_EnvironmentPrefilter(benchmark::State& state) {
+  Renderer* r = renderer();
+  if (!r) return state.SkipWithError("no GL context");
+  RenderRequest q;
+  q.scene = "furnace";
+  q.width = 64;
+  q.height = 64;
+  q.samples = 1;
+  const EnvironmentSpec a = bench_environment(static_cast<int>(state.range(0)), 0);
+  const EnvironmentSpec b = bench_environment(static_cast<int>(state.range(0)), 1);
+  double total = 0;
+  int k = 0;
+  for (auto _ : state) {
+    q.environment = (k++ % 2) ? b : a;
+    auto f = r->render(q);
+    if (!f) return state.SkipWithError(f.error().message.c_str());
+    total += f->environment_ms;
+  }
+  state.counters["environment_ms"] = total / static_cast<double>(state.iterations());
+  // The CPU share alone: building the map and its irradiance (no GL).
+  const auto t0 = std::chrono::steady_clock::now();
+  auto cpu = build_environment(a);
+  if (!cpu) return state.SkipWithError(cpu.error().message.c_str());
+  state.counters["cpu_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  state.SetLabel(a.sky ? "Preetham sky 1024x512" : a.file.filename().string());
+}
+BENCHMARK(BM_EnvironmentPrefilter)
+    ->DenseRange(0, 2)
+    ->ArgName("kind")
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(4)
+    ->UseRealTime();
+
+// 1080p frames of material-grid lit by a uniform ambient term and a sun (the peer: the
+// shading cost without any environment texture), by its built-in sky and sun, and by a 2K
+// EXR map, alternated frame by frame so that all three see the same machine load; the
+// counters are the medians of render_ms and their ratios to the peer. Environments are
+// built before timing (the renderer keeps one; switching between two rebuilds, so each
+// lighting gets its own renderer).
+Scene lit_material_grid(int kind) {
+  Scene scene = *make_builtin_scene("material-grid");
+  if (kind == 0) {
+    scene.environment.reset();
+    scene.ambient_nits = Vec3{5000, 5000, 5000};
+    Light sun;
+    sun.direction = normalize(Vec3{-0.4, -0.7, -0.6});
+    sun.illuminance_lux = 90000;
+    scene.lights.push_back(sun);
+  } else if (kind == 2) {
+    scene.environment = bench_environment(1);
+  }
+  return scene;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+void BM_RenderEnvironment(benchmark::State& state) {
+  static const char* const kNames[3] = {"ambient_ms", "sky_ms", "exr_ms"};
+  std::unique_ptr<Renderer> renderers[3];
+  Scene scenes[3];
+  RenderSettings s;
+  s.width = 1920;
+  s.height = 1080;
+  s.samples = 4;
+  for (int k = 0; k < 3; ++k) {
+    auto r = Renderer::create(Backend::automatic);
+    if (!r) return state.SkipWithError(r.error().message.c_str());
+    renderers[k] = std::move(*r);
+    scenes[k] = lit_material_grid(k);
+    if (!renderers[k]->render(scenes[k], s).ok()) return state.SkipWithError("render failed");  // warm-up, prefilter
+  }
+  std::vector<double> ms[3];
+  for (auto _ : state)
+    for (int k = 0; k < 3; ++k) {
+      auto f = renderers[k]->render(scenes[k], s);
+      if (!f) return state.SkipWithError(f.error().message.c_str());
+      ms[k].push_back(f->render_ms);
+    }
+  for (int k = 0; k < 3; ++k) state.counters[kNames[k]] = median(ms[k]);
+  state.counters["sky_ratio"] = median(ms[1]) / median(ms[0]);
+  state.counters["exr_ratio"] = median(ms[2]) / median(ms[0]);
+  state.SetLabel("medians of alternated frames; peer: uniform ambient + sun");
+}
+BENCHMARK(BM_RenderEnvironment)->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
 
 }  // namespace
 

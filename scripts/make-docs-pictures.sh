@@ -35,4 +35,18 @@ if [ -f "$shared/fixtures/exr/Desk.exr" ]; then
 else
   echo "make-docs-pictures: $shared/fixtures/exr/Desk.exr missing: contact sheet and heatmap skipped" >&2
 fi
+# Environment light: material-grid under its Preetham sky and under a studio EXR, SDR and
+# the heatmap of the HDR10 display luminance. bench_render_pictures renders them through
+# the library (it writes the studio map too); with `hdrd render --environment` wired, the
+# same pictures are `hdrd render --scene material-grid [--environment studio.exr]
+# --mode sdr` and `--mode hdr10 --debug heatmap`.
+pictures=${HDRD_PICTURES:-$here/build/bench/bench_render_pictures}
+if [ -x "$pictures" ]; then
+  "$pictures" "$tmp/env"
+  for name in material-grid-sky material-grid-studio; do
+    cp "$tmp/env/$name-sdr.png" "$tmp/env/$name-hdr10-heatmap.png" "$img/"
+  done
+else
+  echo "make-docs-pictures: $pictures not built (ninja bench_render_pictures): environment pictures skipped" >&2
+fi
 ls -l "$img"

@@ -107,7 +107,7 @@ Vec3 schlick(Vec3 f0, double f90, double exponent, double cos_theta) {
   return f0 + (Vec3{f90, f90, f90} - f0) * s;
 }
 
-Vec3 evaluate(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v) {
+Vec3 evaluate(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 specular_scale) {
   const double nl = saturate(dot(n, l));
   if (nl <= 0) return {0, 0, 0};
   const double nv = std::abs(dot(n, v)) + kNdotVBias;
@@ -115,12 +115,12 @@ Vec3 evaluate(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v) {
   const double nh = saturate(dot(n, h)), vh = saturate(dot(v, h));
   const Vec3 F = schlick(lobes.f0, lobes.f90, lobes.fresnel_exponent, vh);
   const Vec3 diffuse = (Vec3{1, 1, 1} - F) * lobes.diffuse_rho / kPi;
-  const Vec3 specular = F * (ggx_d(nh, lobes.alpha) * smith_v(nl, nv, lobes.alpha));
+  const Vec3 specular = F * specular_scale * (ggx_d(nh, lobes.alpha) * smith_v(nl, nv, lobes.alpha));
   return diffuse + specular;
 }
 
-Vec3 shade(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 illuminance_lux) {
-  return evaluate(lobes, n, l, v) * illuminance_lux * saturate(dot(n, l));
+Vec3 shade(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 illuminance_lux, Vec3 specular_scale) {
+  return evaluate(lobes, n, l, v, specular_scale) * illuminance_lux * saturate(dot(n, l));
 }
 
 Vec3 directional_albedo(const Lobes& lobes, double n_dot_v, int samples) {
@@ -159,6 +159,39 @@ AmbientTerms ambient_terms(double n_dot_v, double roughness, int samples) {
   t.s1 /= count;
   t.d1 /= count;
   return t;
+}
+
+double single_scatter_albedo(double n_dot_v, double roughness, int samples) {
+  Lobes white;
+  white.diffuse_rho = {0, 0, 0};
+  white.f0 = {1, 1, 1};
+  white.f90 = 1;
+  const double r = std::clamp(roughness, kMinRoughness, 1.0);
+  white.alpha = r * r;
+  return directional_albedo(white, n_dot_v, samples).x;
+}
+
+Vec3 energy_compensation(const Lobes& lobes, double n_dot_v, double roughness, int samples) {
+  const double ess = single_scatter_albedo(n_dot_v, roughness, samples);
+  return Vec3{1, 1, 1} + lobes.f0 * (1 / ess - 1);
+}
+
+Vec3 environment_response(const Lobes& lobes, const AmbientTerms& t, Vec3 radiance, Vec3 irradiance_lux,
+                          bool compensate) {
+  const Vec3 one{1, 1, 1};
+  const Vec3 f90{lobes.f90, lobes.f90, lobes.f90};
+  const Vec3 fss_ess = lobes.f0 * t.s0 + f90 * t.s1;
+  const Vec3 diffuse_light = irradiance_lux / kPi;
+  if (!compensate) {
+    const Vec3 kd = (one - lobes.f0) * (1 - t.d1) + (one - f90) * t.d1;
+    return fss_ess * radiance + lobes.diffuse_rho * kd * diffuse_light;
+  }
+  const double ess = t.s0 + t.s1, ems = 1 - ess;
+  // Schlick's F averaged over the cosine-weighted hemisphere: F0 + (F90 - F0) / 21.
+  const Vec3 f_avg = lobes.f0 + (f90 - lobes.f0) * (1.0 / 21.0);
+  const Vec3 denom = one - f_avg * ems;
+  const Vec3 f_ms_ems = fss_ess * f_avg * ems * Vec3{1 / denom.x, 1 / denom.y, 1 / denom.z};  // eq. 12 times E_ms
+  return fss_ess * radiance + f_ms_ems * diffuse_light + lobes.diffuse_rho * (one - fss_ess - f_ms_ems) * diffuse_light;
 }
 
 }  // namespace hdrd::shading::brdf

@@ -9,10 +9,14 @@
 //   Lo  = sum f(l,v) * E * (n.l)+  with c_light = E/pi                 (RTR4 eq. 9.14)
 //
 // Single-scattering GGX loses energy at high roughness (no multiple-bounce term): a
-// rough metal with F0 = 1 reflects about 0.86 of the light at roughness 1 at normal
-// view, less at grazing. The glTF coupling's (1 - F(v.h)) diffuse weight is not
-// energy-conserving either: with a white base colour its albedo exceeds 1 near grazing
-// view (tests/shading/brdf_test.cpp measures both).
+// rough metal with F0 = 1 reflects 1 - ln 2 = 0.307 of the light at roughness 1 at normal
+// view. The renderer compensates by default (RenderSettings::energy_compensation):
+// punctual lights scale the specular lobe by 1 + F0 (1/E_ss - 1) (Kulla & Conty 2017 in
+// Filament's form), environment light adds Fdez-Aguera's (2019) multiple-scattering term
+// and takes the diffuse share from what the specular lobes leave. Without compensation the
+// glTF coupling's (1 - F(v.h)) diffuse weight is not energy-conserving either: with a white
+// base colour its albedo exceeds 1 near grazing view (tests/shading/brdf_test.cpp
+// measures both).
 #pragma once
 
 #include "shading/math.hpp"
@@ -51,10 +55,11 @@ double ggx_d(double n_dot_h, double alpha);
 double smith_v(double n_dot_l, double n_dot_v, double alpha);  // height-correlated, incl. 1/(4 nl nv)
 Vec3 schlick(Vec3 f0, double f90, double exponent, double cos_theta);
 
-// The BRDF value f(l, v) per channel (n, l, v unit vectors).
-Vec3 evaluate(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v);
+// The BRDF value f(l, v) per channel (n, l, v unit vectors), the specular lobe times
+// `specular_scale` (energy_compensation(), or 1 for single scattering).
+Vec3 evaluate(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 specular_scale = {1, 1, 1});
 // Eq. 9.14 for one light of illuminance `illuminance_lux` (colour included) from l.
-Vec3 shade(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 illuminance_lux);
+Vec3 shade(const Lobes& lobes, Vec3 n, Vec3 l, Vec3 v, Vec3 illuminance_lux, Vec3 specular_scale = {1, 1, 1});
 
 // Directional albedo R(v) = integral of f(l,v) (n.l) over the hemisphere (eq. 9.8),
 // by importance sampling (cosine for the diffuse lobe, GGX visible normals for the specular
@@ -69,6 +74,21 @@ struct AmbientTerms {
   double s0 = 0, s1 = 0, d1 = 0;
 };
 AmbientTerms ambient_terms(double n_dot_v, double roughness, int samples = 1024);
+
+// E_ss: the single-scattering specular albedo with F = 1 (s0 + s1 of ambient_terms), by
+// visible-normal sampling with `samples` points.
+double single_scatter_albedo(double n_dot_v, double roughness, int samples = 4096);
+// Kulla & Conty's multiple-scattering factor for punctual lights in Filament's form,
+// 1 + F0 (1 / E_ss - 1), per channel.
+Vec3 energy_compensation(const Lobes& lobes, double n_dot_v, double roughness, int samples = 4096);
+
+// Reflected radiance under environment light, split-sum style (Karis 2013): `radiance`
+// is the prefiltered radiance around the reflection direction, `irradiance_lux` the
+// irradiance on the surface; terms from the ambient table at (n.v, roughness). With
+// `compensate`: Fdez-Aguera 2019 eqs. 10-13 (F_ms E_ms added, diffuse weighted by
+// 1 - (F_ss E_ss + F_ms E_ms)); without: the glTF coupling of the single-scattering terms.
+Vec3 environment_response(const Lobes& lobes, const AmbientTerms& terms, Vec3 radiance, Vec3 irradiance_lux,
+                          bool compensate);
 
 // "No real material has F0 < 0.02 in air": F90 fades with F0 (Filament's
 // saturate(50 * mean F0)), used only when the medium is air.

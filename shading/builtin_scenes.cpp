@@ -64,6 +64,16 @@ Light sun(Vec3 travel, double lux, Vec3 color = {1, 1, 1}) {
   return l;
 }
 
+// The built-in sky (Preetham 1999) with its sun.
+EnvironmentSpec sky(double elevation_deg, double azimuth_deg, double turbidity) {
+  EnvironmentSpec e;
+  e.sky = SkyParams{};
+  e.sky->sun_elevation_deg = elevation_deg;
+  e.sky->sun_azimuth_deg = azimuth_deg;
+  e.sky->turbidity = turbidity;
+  return e;
+}
+
 Light point(Vec3 position, double candela, double range_m = 0) {
   Light l;
   l.name = "lamp";
@@ -108,8 +118,7 @@ Scene material_grid() {
   b.add(b.mesh(make_plane(30, 8)), b.material(plain("backdrop", {0.3, 0.3, 0.3}, 0.8)),
         translate({6.5, 4, -1.5}) * rotate_xyz_deg({90, 0, 0}));
   Scene& s = b.scene();
-  s.lights.push_back(sun({-0.4, -0.7, -0.6}, 20000));
-  s.ambient_nits = Vec3{1500, 1500, 1500};
+  s.environment = sky(44, 146, 2.5);  // the sun behind the camera, over its right shoulder
   s.camera = Camera{{6.5, 2.2, 13.5}, {6.5, 2.0, 0}, {0, 1, 0}, 36 * kPi / 180};
   return s;
 }
@@ -181,9 +190,8 @@ Scene hdr() {
   b.add(sphere, b.material(plain("chrome", {0.549, 0.556, 0.554}, 0.05, 1)), translate({-1.5, 1, -6}));
   b.add(sphere, b.material(plain("white ball", {0.8, 0.8, 0.8}, 0.5)), translate({2.0, 1, -9}));
   Scene& s = b.scene();
-  s.lights.push_back(sun({-0.45, -0.75, 0.45}, 100000));
+  s.environment = sky(50, 45, 2.5);                 // a clear midday sky, the sun ahead and to the right
   s.lights.push_back(point({0.5, 2.6, 5.5}, 1.0));  // a 1 cd night light
-  s.ambient_nits = Vec3{4000, 5000, 6500};          // clear-sky radiance, bluish
   s.camera = Camera{{0.6, 1.6, 7.4}, {-0.2, 1.1, -5}, {0, 1, 0}, 62 * kPi / 180};
   return s;
 }

@@ -88,7 +88,8 @@
   X(UniformBlockBinding, PFNGLUNIFORMBLOCKBINDINGPROC)                  \
   X(Uniform1i, PFNGLUNIFORM1IPROC)                                      \
   X(Uniform2i, PFNGLUNIFORM2IPROC)                                      \
-  X(Uniform1f, PFNGLUNIFORM1FPROC)
+  X(Uniform1f, PFNGLUNIFORM1FPROC)                                      \
+  X(Uniform3f, PFNGLUNIFORM3FPROC)
 
 namespace hdrd::shading {
 

@@ -42,7 +42,7 @@ std::string glsl_preamble(const GlApi& gl) {
   return "#version 320 es\n#define HDRD_GLES 1\n"
          "precision highp float;\nprecision highp int;\n"
          "precision highp sampler2D;\nprecision highp sampler3D;\nprecision highp sampler2DArray;\n"
-         "precision highp sampler2DShadow;\nprecision highp sampler2DMS;\n"
+         "precision highp sampler2DShadow;\nprecision highp sampler2DMS;\nprecision highp samplerCube;\n"
          "precision highp usampler2D;\nprecision highp isampler2D;\n";
 }
 

@@ -580,8 +580,8 @@ Result<Scene> convert(std::span<const std::uint8_t> bytes, const std::filesystem
 
 // glTF files bring exactly their own lights and camera; a file without any gets a
 // default rig, and the warnings say so.
-void add_default_rig(Scene& s) {
-  if (s.lights.empty()) {
+void add_default_rig(Scene& s, bool rig) {
+  if (s.lights.empty() && rig) {
     Light key;
     key.name = "default key light";
     key.direction = normalize(Vec3{0.35, -0.55, -0.75});
@@ -619,7 +619,7 @@ Result<Scene> load_gltf_raw(const std::filesystem::path& path, const SceneLoadOp
 Result<Scene> load_gltf_file(const std::filesystem::path& path, const SceneLoadOptions& options) {
   auto s = load_gltf_raw(path, options);
   if (!s) return s;
-  add_default_rig(*s);
+  add_default_rig(*s, options.default_rig);
   if (auto v = validate(*s, options.limits); !v) return v.error();
   return s;
 }
@@ -629,7 +629,7 @@ Result<Scene> load_gltf_memory(std::span<const std::uint8_t> bytes, const std::f
   auto s = convert(bytes, base_dir, options);
   if (!s) return s;
   s->name = "gltf";
-  add_default_rig(*s);
+  add_default_rig(*s, options.default_rig);
   if (auto v = validate(*s, options.limits); !v) return v.error();
   return s;
 }

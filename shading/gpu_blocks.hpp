@@ -19,17 +19,32 @@ inline constexpr int kMaxLights = 64;  // = SceneLimits::max_lights and the GLSL
 struct FrameBlock {
   mat4 view_proj;      // world -> camera clip
   mat4 light_clip;     // world -> shadow-map clip (orthographic)
+  mat4 inv_view_proj;  // camera clip -> world (the background's view rays)
+  mat4 env_rotation;   // world -> environment directions (3x3 in a mat4)
   vec4 camera_pos;     // xyz
   vec4 ambient_nits;   // rgb radiance; w = 1 when the scene has an ambient term
   vec4 params;         // x pre-exposure, y medium IOR, z light count, w 1 = shadow map bound
   vec4 shadow_params;  // x normal offset (m), y 1/shadow-map size, z output clamp, w unused
+  vec4 env_params;     // x radiance scale, y specular max LOD, z kEnv* mode, w background LOD
+  vec4 sun_disc;       // xyz world direction toward the sun, w cos of its angular radius
+  vec4 sun_radiance;   // rgb disc radiance (scaled), w 1 = the background shows the disc
+  vec4 options;        // x 1 = multiple-scattering energy compensation
 };
 static_assert(offsetof(FrameBlock, light_clip) == 64);
-static_assert(offsetof(FrameBlock, camera_pos) == 128);
-static_assert(offsetof(FrameBlock, ambient_nits) == 144);
-static_assert(offsetof(FrameBlock, params) == 160);
-static_assert(offsetof(FrameBlock, shadow_params) == 176);
-static_assert(sizeof(FrameBlock) == 192);
+static_assert(offsetof(FrameBlock, inv_view_proj) == 128);
+static_assert(offsetof(FrameBlock, env_rotation) == 192);
+static_assert(offsetof(FrameBlock, camera_pos) == 256);
+static_assert(offsetof(FrameBlock, ambient_nits) == 272);
+static_assert(offsetof(FrameBlock, params) == 288);
+static_assert(offsetof(FrameBlock, shadow_params) == 304);
+static_assert(offsetof(FrameBlock, env_params) == 320);
+static_assert(offsetof(FrameBlock, sun_disc) == 336);
+static_assert(offsetof(FrameBlock, sun_radiance) == 352);
+static_assert(offsetof(FrameBlock, options) == 368);
+static_assert(sizeof(FrameBlock) == 384);
+
+// env_params.z: where environment light comes from.
+inline constexpr int kEnvNone = 0, kEnvUniform = 1, kEnvMap = 2;
 
 // struct Light in layout(std140, binding = 1) uniform Lights { Light lights[kMaxLights]; }
 struct LightEntry {
@@ -75,6 +90,9 @@ enum TextureUnit : int {
   kUnitOcclusion = 4,
   kUnitShadow = 5,
   kUnitAmbientLut = 6,
+  kUnitEnvSpecular = 7,    // prefiltered GGX cube map (roughness = LOD / max LOD)
+  kUnitEnvIrradiance = 8,  // irradiance cube map, lux
+  kUnitEnvBackground = 9,  // the equirectangular map itself (background pass)
 };
 
 inline constexpr int kAmbientLutSize = 32;  // n.v x roughness

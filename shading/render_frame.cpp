@@ -8,6 +8,7 @@
 
 #include "shading/renderer_impl.hpp"
 #include "shading/shaders.hpp"
+#include "shading/shadows.hpp"
 
 namespace hdrd::shading {
 namespace {
@@ -59,13 +60,6 @@ int shadow_light(const Scene& s) {
     }
   }
   return best;
-}
-
-Mat4 light_clip_matrix(const Light& l, const Bounds& b) {
-  const Vec3 dir = normalize(l.direction), c = b.center();
-  const double r = std::max(b.radius(), 1e-3);
-  const Vec3 up = std::abs(dir.y) > 0.99 ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
-  return orthographic(-r, r, -r, r, 0.5 * r, 3.5 * r) * look_at(c - dir * (2 * r), c, up);
 }
 
 gpu::LightBlock light_block(const Scene& s, int shadow_index) {
@@ -165,7 +159,8 @@ void shadow_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s) {
   gl.Disable(GL_POLYGON_OFFSET_FILL);
 }
 
-void lit_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s, const Camera& cam, Vec3 background) {
+void lit_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s, const Camera& cam, Vec3 background,
+              bool environment_background) {
   const GlApi& gl = *r.gl;
   const Targets& t = r.targets;
   gl.BindFramebuffer(GL_FRAMEBUFFER, t.samples > 1 ? t.msaa_fbo.id() : t.fbo.id());
@@ -191,6 +186,10 @@ void lit_pass(Renderer::Impl& r, const GpuScene& g, const Scene& s, const Camera
       continue;
     }
     draw_instance(r, g, s, i, false);
+  }
+  if (environment_background) {
+    background_pass(r);
+    gl.UseProgram(r.lit_program.id());
   }
   if (blended.empty()) return;
   std::sort(blended.begin(), blended.end());  // far to near
@@ -305,6 +304,79 @@ int pick_samples(const GlApi& gl, const RenderSettings& s, std::vector<std::stri
 // Light-based exposure of "a white card = 1" (REFERENCE.md §1.2: scale = pi / E).
 double white_card_scale(double dominant_lux) { return dominant_lux > 0 ? kPi / dominant_lux : 0.01; }
 
+// The frame's environment: its textures, the world -> environment rotation, its scale.
+struct FrameEnvironment {
+  const GpuEnvironment* gpu = nullptr;
+  Mat4 world_to_env;
+  double scale = 1;
+  MeteredEnvironment metered() const { return {gpu ? &gpu->lighting.irradiance : nullptr, world_to_env, scale}; }
+};
+
+// Prepares the scene's environment (if any) and adds the sky's sun to its lights.
+Result<FrameEnvironment> setup_environment(Renderer::Impl& r, Scene& scene, RenderResult& out) {
+  FrameEnvironment env;
+  if (!scene.environment) return env;
+  const EnvironmentSpec& spec = *scene.environment;
+  auto gpu = prepare_environment(r, spec, out.environment_ms);
+  if (!gpu) return gpu.error();
+  env.gpu = *gpu;
+  env.scale = spec.scale;
+  // The sky is built with its sun at azimuth 0: its azimuth turns it like rotation_deg.
+  env.world_to_env = environment_rotation(spec.rotation_deg + (spec.sky ? spec.sky->sun_azimuth_deg : 0.0));
+  out.environment = env.gpu->lighting.description;
+  for (const auto& w : env.gpu->lighting.warnings) out.warnings.push_back(w);
+  if (const auto& sun = env.gpu->lighting.sun) {
+    if (static_cast<int>(scene.lights.size()) >= SceneLimits{}.max_lights)
+      return make_error("scene.invalid", fmt::format("environment.sky: the sun would exceed the limit of {} lights",
+                                                     SceneLimits{}.max_lights), "environment.sky");
+    Light l;
+    l.name = "sun";
+    l.type = LightType::directional;
+    l.direction = -transpose(env.world_to_env).transform_dir(sun->direction);
+    l.illuminance_lux = sun->illuminance_lux * spec.scale;
+    l.color = sun->color;
+    scene.lights.push_back(l);
+  }
+  return env;
+}
+
+void fill_environment(gpu::FrameBlock& frame, const FrameEnvironment& env, const Scene& scene, const Camera& cam,
+                      int height) {
+  frame.ambient_nits = to_gpu(scene.ambient_nits.value_or(Vec3{}), scene.ambient_nits ? 1 : 0);
+  const int mode = env.gpu ? gpu::kEnvMap : scene.ambient_nits ? gpu::kEnvUniform : gpu::kEnvNone;
+  if (!env.gpu) {
+    frame.env_params = {1, 0, float(mode), 0};
+    return;
+  }
+  frame.env_rotation = to_gpu(env.world_to_env);
+  // Background LOD: a pixel's angle at the centre of the view against a map texel's at the equator.
+  const double pixel_rad = 2 * std::tan(cam.yfov_rad / 2) / height, texel_rad = 2 * kPi / env.gpu->background_width;
+  frame.env_params = {float(env.scale), float(env.gpu->specular_levels - 1), float(mode),
+                      float(std::max(0.0, std::log2(pixel_rad / texel_rad)))};
+  if (const auto& sun = env.gpu->lighting.sun) {
+    const Vec3 d = transpose(env.world_to_env).transform_dir(sun->direction);
+    frame.sun_disc = to_gpu(d, std::cos(sun->angular_radius_rad));
+    frame.sun_radiance = to_gpu(sun->color * (sun->disc_luminance_nits * env.scale), 1);
+  }
+}
+
+void warn_about_range(const FrameEnvironment& env, const Scene& scene, const RenderSettings& settings,
+                      double pre_exposure, std::vector<std::string>& warnings) {
+  if (scene.ambient_nits || env.gpu)
+    for (const Material& m : scene.materials)
+      if (m.fresnel_exponent != 5.0) {
+        warnings.push_back("environment light assumes the Schlick exponent 5 (materials with another "
+                           "fresnel_power get exponent-5 environment reflection)");
+        break;
+      }
+  if (!env.gpu || settings.target != TargetFormat::rgba16f || scene.background_nits) return;
+  const double brightest = env.gpu->lighting.max_luminance_nits * env.scale;
+  if (brightest * pre_exposure > kHalfMax)
+    warnings.push_back(fmt::format("the environment's brightest radiance ({:.3g} cd/m2{}) exceeds the RGBA16F target "
+                                   "at this exposure: clamped to {:.3g} cd/m2",
+                                   brightest, env.gpu->lighting.sun ? ", the sun disc" : "", kHalfMax / pre_exposure));
+}
+
 }  // namespace
 
 Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& settings) {
@@ -319,39 +391,44 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   out.camera = resolve_camera(scene, settings);
   if (auto r = validate_camera(out.camera); !r) return r.error();
   scene.camera = out.camera;
-  out.dominant_illuminance_lux = dominant_illuminance_lux(scene, out.camera);
   for (const auto& inst : scene.instances) out.triangles += scene.meshes[inst.mesh].indices.size() / 3;
-  if (scene.ambient_nits)
-    for (const Material& m : scene.materials)
-      if (m.fresnel_exponent != 5.0) {
-        out.warnings.push_back("the ambient term assumes the Schlick exponent 5 (materials with another "
-                               "fresnel_power get exponent-5 ambient reflection)");
-        break;
-      }
-
-  const Bounds bounds = world_bounds(scene);
-  const auto [znear, zfar] = depth_range(out.camera, bounds);
-  const double aspect = double(settings.width) / settings.height;
-  const int shadow_index = bounds.empty ? -1 : shadow_light(scene);
-  const double pre_exposure = settings.target == TargetFormat::rgba16f ? white_card_scale(out.dominant_illuminance_lux) : 1.0;
-
-  gpu::FrameBlock frame{};
-  frame.view_proj = to_gpu(perspective(out.camera.yfov_rad, aspect, znear, zfar) *
-                           look_at(out.camera.position, out.camera.target, out.camera.up));
-  const double shadow_texel = 2 * std::max(bounds.radius(), 1e-3) / settings.shadow_map_size;
-  if (shadow_index >= 0) frame.light_clip = to_gpu(light_clip_matrix(scene.lights[shadow_index], bounds));
-  frame.camera_pos = to_gpu(out.camera.position, 1);
-  frame.ambient_nits = to_gpu(scene.ambient_nits.value_or(Vec3{}), scene.ambient_nits ? 1 : 0);
-  frame.params = {float(pre_exposure), float(scene.medium_ior), float(scene.lights.size()), shadow_index >= 0 ? 1.0f : 0.0f};
-  frame.shadow_params = {float(1.5 * shadow_texel), 1.0f / settings.shadow_map_size,
-                         settings.target == TargetFormat::rgba16f ? kHalfMax : 3.0e38f, 0};
-  const Vec3 background = scene.background_nits.value_or(scene.ambient_nits.value_or(Vec3{})) * pre_exposure;
 
   CurrentContext current(*context_);
   if (!current.status()) return current.status().error();
   Impl& r = *impl_;
   const GlApi& gl = *r.gl;
   gl.GetError();
+  auto env = setup_environment(r, scene, out);
+  if (!env) return env.error();
+  out.dominant_illuminance_lux = dominant_illuminance_lux(scene, out.camera, env->metered());
+
+  const Bounds bounds = world_bounds(scene);
+  const auto [znear, zfar] = depth_range(out.camera, bounds);
+  const double aspect = double(settings.width) / settings.height;
+  const int shadow_index = bounds.empty ? -1 : shadow_light(scene);
+  const double pre_exposure = settings.target == TargetFormat::rgba16f ? white_card_scale(out.dominant_illuminance_lux) : 1.0;
+  warn_about_range(*env, scene, settings, pre_exposure, out.warnings);
+
+  gpu::FrameBlock frame{};
+  const Mat4 view_proj = perspective(out.camera.yfov_rad, aspect, znear, zfar) *
+                         look_at(out.camera.position, out.camera.target, out.camera.up);
+  frame.view_proj = to_gpu(view_proj);
+  frame.inv_view_proj = to_gpu(inverse(view_proj));
+  if (shadow_index >= 0) {
+    const ShadowFit fit = fit_shadow(scene.lights[shadow_index], bounds, out.camera, aspect, znear, zfar,
+                                     settings.shadow_map_size);
+    frame.light_clip = to_gpu(fit.light_clip);
+    out.shadow_texel_m = fit.texel_m;
+  }
+  frame.camera_pos = to_gpu(out.camera.position, 1);
+  fill_environment(frame, *env, scene, out.camera, settings.height);
+  frame.params = {float(pre_exposure), float(scene.medium_ior), float(scene.lights.size()), shadow_index >= 0 ? 1.0f : 0.0f};
+  frame.shadow_params = {float(kShadowNormalOffsetTexels * out.shadow_texel_m), 1.0f / settings.shadow_map_size,
+                         settings.target == TargetFormat::rgba16f ? kHalfMax : 3.0e38f, 0};
+  frame.options = {settings.energy_compensation ? 1.0f : 0.0f, 0, 0, 0};
+  const bool environment_background = env->gpu && !scene.background_nits;
+  const Vec3 background = scene.background_nits.value_or(scene.ambient_nits.value_or(Vec3{})) * pre_exposure;
+
   const int samples = pick_samples(gl, settings, out.warnings);
   out.samples = samples;
   if (auto e = ensure_targets(r, settings, samples); !e) {
@@ -365,7 +442,8 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   auto g = upload_scene(r, scene, frame, light_block(scene, shadow_index));
   if (!g) return g.error();
   if (shadow_index >= 0) shadow_pass(r, *g, scene);
-  lit_pass(r, *g, scene, out.camera, background);
+  bind_environment(r, env->gpu);
+  lit_pass(r, *g, scene, out.camera, background, environment_background);
   if (samples > 1)
     resolve_pass(r, settings.resolve == MsaaResolve::box ? 0.0
                                                          : white_card_scale(out.dominant_illuminance_lux) / pre_exposure);
@@ -426,11 +504,21 @@ Result<RenderResult> Renderer::render(const RenderRequest& request) {
   settings.camera = request.camera;
   settings.target = request.target;
   settings.readback = request.readback;
+  settings.energy_compensation = request.energy_compensation;
   if (auto r = check_settings(settings); !r) return r.error();  // before any loading work
-  auto scene = request.scene_json ? parse_scene_json(*request.scene_json, request.load)
-                                  : load_scene(request.scene.empty() ? default_scene_name() : request.scene,
-                                               request.load);
+  if (request.environment)
+    if (auto r = validate_environment_spec(*request.environment); !r) return r.error();
+  SceneLoadOptions load = request.load;
+  if (request.environment) load.default_rig = false;  // the environment lights the model
+  auto scene = request.scene_json ? parse_scene_json(*request.scene_json, load)
+                                  : load_scene(request.scene.empty() ? default_scene_name() : request.scene, load);
   if (!scene) return scene.error();
+  if (request.environment) {
+    // The request's environment replaces the scene's, its sun included (the sky's sun is
+    // added at render time, never stored in the scene's lights).
+    scene->environment = request.environment;
+    scene->ambient_nits.reset();
+  }
   return render(std::move(*scene), settings);
 }
 

@@ -47,6 +47,7 @@ Result<void> init_impl(Renderer::Impl& r) {
   auto reduce = build_program(gl, "reduce", shaders::fullscreen_vertex(gl), shaders::reduce_fragment(gl));
   if (!reduce) return reduce.error();
   r.reduce_program = std::move(*reduce);
+  if (auto ibl = init_ibl(r); !ibl) return ibl;
   r.reduce_block_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_block");
   r.reduce_size_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_size");
   r.reduce_scale_loc = gl.GetUniformLocation(r.reduce_program.id(), "u_scale");

@@ -50,6 +50,9 @@ struct RenderSettings {
   TargetFormat target = TargetFormat::rgba32f;
   MsaaResolve resolve = MsaaResolve::tonemap_weighted;
   int shadow_map_size = 2048;
+  // Multiple-scattering GGX energy compensation (Kulla & Conty 2017 for punctual lights,
+  // Fdez-Aguera 2019 for environment light); false: single scattering, for comparison.
+  bool energy_compensation = true;
   // full: read the float frame back (scene_nits). reduced: read back only block means of
   // kMeteringBlock x kMeteringBlock pixels (metering_nits), e.g. to meter exposure when the
   // frame is encoded on the GPU; read_frame() can still fetch the full frame afterwards.
@@ -67,6 +70,10 @@ struct RenderRequest {
   TargetFormat target = TargetFormat::rgba32f;
   Readback readback = Readback::full;
   SceneLoadOptions load;
+  // Replaces the scene's environment and ambient term (and the sky's sun). A glTF file
+  // rendered with an environment gets exactly its own lights plus it (no default rig).
+  std::optional<EnvironmentSpec> environment;
+  bool energy_compensation = true;
 };
 
 struct RenderResult {
@@ -79,7 +86,11 @@ struct RenderResult {
   int samples = 1;          // MSAA samples used
   double render_ms = 0;     // GPU work (shadow + main pass + resolve), glFinish-bounded
   double readback_ms = 0;
+  // Loading and prefiltering the environment (CPU and GPU); 0 when reused from an earlier frame.
+  double environment_ms = 0;
   double dominant_illuminance_lux = 0;  // for light-based exposure (pi / E); 0 if none
+  std::string environment;              // what lit the frame: a file name or the sky's parameters; empty: none
+  double shadow_texel_m = 0;            // world size of a shadow-map texel (0: no shadow map)
   Camera camera;                         // the camera used
   std::int64_t triangles = 0;
   std::vector<std::string> warnings;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "shading/gl_util.hpp"
@@ -32,6 +33,17 @@ struct GpuScene {
   bool has_shadow = false;
 };
 
+// An environment on the GPU, kept between frames (one per renderer: the last one used).
+struct GpuEnvironment {
+  std::string key;                 // environment_cache_key()
+  EnvironmentLighting lighting;    // its map is released once uploaded
+  GlName background;               // the equirectangular map, RGBA32F with mips
+  int background_width = 0;
+  GlName specular;                 // GGX-prefiltered cube map, roughness = LOD / (levels - 1)
+  int specular_levels = 0;
+  GlName irradiance;               // irradiance cube map, lux
+};
+
 struct Renderer::Impl {
   GlContext* context = nullptr;
   const GlApi* gl = nullptr;
@@ -47,7 +59,17 @@ struct Renderer::Impl {
   int shadow_size = 0;
   bool has_frame = false;  // targets.color holds the last rendered frame
   double last_pre_exposure = 1.0;
+  // Environment light (ibl.cpp).
+  GlName background_program, cube_program, prefilter_program;
+  std::optional<GpuEnvironment> environment;
 };
+
+// ibl.cpp: programs at start-up; an environment's textures (built, or the cached ones
+// when the key matches), adding the time spent to `spent_ms`; the background pass.
+Result<void> init_ibl(Renderer::Impl& r);
+Result<const GpuEnvironment*> prepare_environment(Renderer::Impl& r, const EnvironmentSpec& spec, double& spent_ms);
+void bind_environment(Renderer::Impl& r, const GpuEnvironment* env);
+void background_pass(Renderer::Impl& r);
 
 // gpu_scene.cpp
 Result<GpuScene> upload_scene(Renderer::Impl& r, const Scene& scene, const gpu::FrameBlock& frame,

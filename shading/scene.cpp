@@ -121,6 +121,10 @@ Result<void> validate_environment(const Scene& s) {
   if (!std::isfinite(s.medium_ior) || s.medium_ior < 1.0 || s.medium_ior > 3.0)
     return scene_error("medium_ior", "must be in [1, 3]");
   if (s.ambient_nits && !finite_nonneg(*s.ambient_nits)) return scene_error("ambient", "must be finite and >= 0");
+  if (s.environment) {
+    if (s.ambient_nits) return scene_error("ambient_nits", "give either ambient_nits or environment, not both");
+    if (auto r = validate_environment_spec(*s.environment); !r) return r;
+  }
   if (s.background_nits && !finite_nonneg(*s.background_nits))
     return scene_error("background_nits", "must be finite and >= 0");
   if (s.camera) return validate_camera(*s.camera);
@@ -198,19 +202,29 @@ Camera default_camera(const Scene& s, double aspect) {
   return c;
 }
 
-double dominant_illuminance_lux(const Scene& s, const Camera& camera) {
-  double best = 0;
+double dominant_illuminance_lux(const Scene& s, const Camera& camera, const MeteredEnvironment& env) {
+  // Irradiance from the environment on a card facing `n`, and the largest over all n.
+  const auto environment_lux = [&](Vec3 n) {
+    if (s.ambient_nits) return kPi * luminance(*s.ambient_nits);
+    if (!env.irradiance) return 0.0;
+    return env.scale * luminance(env.irradiance->lookup(env.world_to_environment.transform_dir(n)));
+  };
+  double best = s.ambient_nits ? kPi * luminance(*s.ambient_nits)
+                               : env.irradiance ? env.scale * env.irradiance->max_illuminance_lux() : 0.0;
   for (const Light& l : s.lights) {
     double e = 0;
+    Vec3 toward{0, 1, 0};
     if (l.type == LightType::directional) {
       e = l.illuminance_lux;
+      toward = -normalize(l.direction);
     } else {
-      const double d2 = std::max(dot(camera.target - l.position, camera.target - l.position), 1e-6);
-      e = l.intensity_cd / d2;
+      const Vec3 d = l.position - camera.target;
+      e = l.intensity_cd / std::max(dot(d, d), 1e-6);
+      toward = normalize(d);
     }
-    best = std::max(best, e * luminance(l.color));
+    const double lux = e * luminance(l.color);
+    if (lux > 0) best = std::max(best, lux + environment_lux(toward));
   }
-  if (s.ambient_nits) best = std::max(best, kPi * luminance(*s.ambient_nits));
   return best;
 }
 

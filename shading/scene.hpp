@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "encode/result.hpp"
+#include "shading/environment.hpp"
 #include "shading/math.hpp"
 
 namespace hdrd::shading {
@@ -109,7 +110,10 @@ struct Scene {
   std::vector<Light> lights;
   std::optional<Camera> camera;
   std::optional<Vec3> ambient_nits;     // uniform environment radiance; only when asked for
-  std::optional<Vec3> background_nits;  // what the camera sees behind everything (default: ambient or 0)
+  // Light from the world: an environment map or the built-in sky (with its sun). Exclusive
+  // with ambient_nits; the renderer adds the sky's sun to the lights.
+  std::optional<EnvironmentSpec> environment;
+  std::optional<Vec3> background_nits;  // what the camera sees behind everything (default: environment, ambient or 0)
   double medium_ior = 1.0;              // 1 = air, 1.33 = water
   std::vector<std::string> warnings;
 };
@@ -140,9 +144,19 @@ Result<void> validate_camera(const Camera& c);
 // A camera looking at the scene's bounds from the front, slightly above.
 Camera default_camera(const Scene& s, double aspect);
 
-// Largest illuminance on a surface facing a light, in lux, for light-based exposure
-// (REFERENCE.md §1.2): directional E, point/spot I/d^2 at the camera target, pi L for an
-// ambient radiance L. 0 when the scene has no light at all.
-double dominant_illuminance_lux(const Scene& s, const Camera& camera);
+// The environment's light as the meter sees it in one frame (rotation and scale applied).
+struct MeteredEnvironment {
+  const IrradianceCube* irradiance = nullptr;  // none: no environment map
+  Mat4 world_to_environment;
+  double scale = 1;
+};
+
+// Largest illuminance on a card at the camera's subject (its target), in lux, for
+// light-based exposure (REFERENCE.md §1.2): the card turned toward each light receives
+// that light (directional E, point/spot I/d^2) plus what the environment gives on it
+// (the irradiance map, or pi L for an ambient radiance L); turned toward the brightest
+// part of the environment it receives the environment's largest irradiance. 0 when the
+// scene has no light at all.
+double dominant_illuminance_lux(const Scene& s, const Camera& camera, const MeteredEnvironment& environment = {});
 
 }  // namespace hdrd::shading

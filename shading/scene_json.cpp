@@ -392,9 +392,42 @@ void read_objects(Reader& r, const json& doc, Scene& s, const std::map<std::stri
   }
 }
 
+// "environment": {"file": ..., "scale": ..., "rotation_deg": ...} or {"sky": {...}, ...}.
+SkyParams read_sky(Reader& r, const json& j, const std::string& p) {
+  SkyParams sky;
+  if (!r.object(j, p, {"sun_elevation_deg", "sun_azimuth_deg", "turbidity", "ground_albedo", "sun"})) return sky;
+  sky.sun_elevation_deg = r.number(j, p, "sun_elevation_deg", sky.sun_elevation_deg, 0, 90);
+  sky.sun_azimuth_deg = r.number(j, p, "sun_azimuth_deg", sky.sun_azimuth_deg, -360, 360);
+  sky.turbidity = r.number(j, p, "turbidity", sky.turbidity, 1.7, 10);
+  sky.ground_albedo = r.number(j, p, "ground_albedo", sky.ground_albedo, 0, 1);
+  sky.sun = r.boolean(j, p, "sun", sky.sun);
+  return sky;
+}
+
+void read_environment(Reader& r, const json& j, Scene& s, const SceneLoadOptions& options) {
+  const std::string p = "environment";
+  if (!r.object(j, p, {"file", "sky", "scale", "rotation_deg"})) return;
+  EnvironmentSpec e;
+  if (j.contains("file") == j.contains("sky")) return r.fail(p, "give exactly one of file and sky");
+  if (j.contains("sky")) {
+    e.sky = read_sky(r, j["sky"], p + ".sky");
+  } else {
+    const std::string file = r.string(j, p, "file", "");
+    if (r.failed()) return;
+    if (file.empty()) return r.fail(p + ".file", "must not be empty");
+    if (!options.allow_files) return r.fail(p + ".file", "file references are not allowed here");
+    const std::filesystem::path path(file);
+    e.file = path.is_absolute() ? path : options.base_dir / path;
+  }
+  e.scale = r.number(j, p, "scale", 1, 0, kBig);
+  e.rotation_deg = r.number(j, p, "rotation_deg", 0, -3600, 3600);
+  if (!r.failed() && s.ambient_nits) return r.fail("ambient_nits", "give either ambient_nits or environment, not both");
+  s.environment = std::move(e);
+}
+
 void read_scene(Reader& r, const json& doc, Scene& s, const SceneLoadOptions& options) {
   if (!r.object(doc, "", {"hdrd_scene", "name", "camera", "medium_ior", "ambient_nits", "background_nits",
-                          "materials", "lights", "objects"}))
+                          "environment", "materials", "lights", "objects"}))
     return;
   if (!doc.contains("hdrd_scene")) return r.fail("hdrd_scene", fmt::format("missing (must be {})", kFormatVersion));
   if (r.number(doc, "", "hdrd_scene", 0, kFormatVersion, kFormatVersion) != kFormatVersion) return;
@@ -403,6 +436,7 @@ void read_scene(Reader& r, const json& doc, Scene& s, const SceneLoadOptions& op
   s.medium_ior = r.number(doc, "", "medium_ior", 1, 1, 3);
   s.ambient_nits = r.opt_vec3(doc, "", "ambient_nits", 0, kBig, true);
   s.background_nits = r.opt_vec3(doc, "", "background_nits", 0, kBig, true);
+  if (doc.contains("environment")) read_environment(r, doc["environment"], s, options);
 
   std::map<std::string, int> names;
   if (const json* mats = r.array(doc, "", "materials", options.limits.max_materials))

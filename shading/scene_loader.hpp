@@ -27,6 +27,10 @@ struct SceneLoadOptions {
   // texture): 1 cd/m2, the "nits" reading that Blender's glTF I/O uses in its standard
   // lighting mode. glTF itself does not fix the unit.
   double gltf_emissive_nits = 1.0;
+  // A glTF file without lights gets a default rig (100 lux key light, 10 cd/m2 ambient);
+  // false when an environment lights it (RenderRequest::environment): then it gets
+  // exactly its own lights.
+  bool default_rig = true;
 };
 
 // ---- Built-in scenes ---------------------------------------------------------------------
@@ -43,8 +47,9 @@ Result<Scene> parse_scene_json_text(std::string_view text, const SceneLoadOption
 
 // ---- glTF 2.0 --------------------------------------------------------------------------------
 // Metallic-roughness materials, sRGB base colour and emissive textures, normal maps,
-// KHR_materials_emissive_strength, KHR_lights_punctual, cameras. A file without lights or
-// camera gets a default rig (with a warning saying so); otherwise exactly its own lights.
+// KHR_materials_emissive_strength, KHR_lights_punctual, cameras. A file without lights gets
+// a default rig (with a warning saying so) unless options.default_rig is false; otherwise
+// exactly its own lights.
 Result<Scene> load_gltf_file(const std::filesystem::path& path, const SceneLoadOptions& options = {});
 Result<Scene> load_gltf_memory(std::span<const std::uint8_t> bytes, const std::filesystem::path& base_dir,
                                const SceneLoadOptions& options = {});

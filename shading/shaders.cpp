@@ -15,11 +15,14 @@ std::string constants() {
       "#define MAX_LIGHTS {}\n#define MIN_ROUGHNESS {:.9g}\n#define NDOTV_BIAS {:.9g}\n#define AMBIENT_LUT_SIZE {}\n"
       "#define TEX_BASE {}\n#define TEX_MR {}\n#define TEX_NORMAL {}\n#define TEX_EMISSIVE {}\n#define TEX_OCCLUSION {}\n"
       "#define UNIT_BASE {}\n#define UNIT_MR {}\n#define UNIT_NORMAL {}\n#define UNIT_EMISSIVE {}\n"
-      "#define UNIT_OCCLUSION {}\n#define UNIT_SHADOW {}\n#define UNIT_AMBIENT {}\n",
+      "#define UNIT_OCCLUSION {}\n#define UNIT_SHADOW {}\n#define UNIT_AMBIENT {}\n#define UNIT_ENV_SPECULAR {}\n"
+      "#define UNIT_ENV_IRRADIANCE {}\n#define UNIT_ENV_BACKGROUND {}\n#define ENV_NONE {}\n#define ENV_UNIFORM {}\n"
+      "#define ENV_MAP {}\n",
       gpu::kMaxLights, brdf::kMinRoughness, brdf::kNdotVBias, gpu::kAmbientLutSize, gpu::kTexBaseColor,
       gpu::kTexMetalRough, gpu::kTexNormal, gpu::kTexEmissive, gpu::kTexOcclusion, int(gpu::kUnitBaseColor),
       int(gpu::kUnitMetalRough), int(gpu::kUnitNormal), int(gpu::kUnitEmissive), int(gpu::kUnitOcclusion),
-      int(gpu::kUnitShadow), int(gpu::kUnitAmbientLut));
+      int(gpu::kUnitShadow), int(gpu::kUnitAmbientLut), int(gpu::kUnitEnvSpecular), int(gpu::kUnitEnvIrradiance),
+      int(gpu::kUnitEnvBackground), gpu::kEnvNone, gpu::kEnvUniform, gpu::kEnvMap);
 }
 
 // The blocks of gpu_blocks.hpp, member for member.
@@ -27,10 +30,16 @@ constexpr const char* kBlocks = R"(
 layout(std140, binding = 0) uniform Frame {
   mat4 view_proj;
   mat4 light_clip;
+  mat4 inv_view_proj;
+  mat4 env_rotation;
   vec4 camera_pos;
   vec4 ambient_nits;
   vec4 params;
   vec4 shadow_params;
+  vec4 env_params;
+  vec4 sun_disc;
+  vec4 sun_radiance;
+  vec4 options;
 };
 struct Light {
   vec4 color_intensity;
@@ -70,10 +79,18 @@ void main() {
 }
 )";
 
-// The BRDF of shading/brdf.cpp, line for line (the CPU version is the tests' oracle).
-constexpr const char* kBrdf = R"(
+constexpr const char* kMath = R"(
 const float PI = 3.14159265358979;
 
+// Equirectangular coordinates (environment.hpp's equirect_uv): u = 0.5 + azimuth / 2 pi
+// with the azimuth from -z toward +x, v = zenith angle / pi.
+vec2 equirect_uv(vec3 d) {
+  return vec2(0.5 + atan(d.x, -d.z + 1e-30) * (0.5 / PI), acos(clamp(d.y, -1.0, 1.0)) * (1.0 / PI));
+}
+)";
+
+// The BRDF of shading/brdf.cpp, line for line (the CPU version is the tests' oracle).
+constexpr const char* kBrdf = R"(
 // GGX (RTR4 eq. 9.41) as alpha^2 / (pi ((n.h alpha)^2 + |n x h|^2)^2): no cancellation
 // of (n.h)^2 (alpha^2 - 1) + 1 near n.h = 1 in float32.
 float ggx_d(vec3 n, vec3 h, float nh, float alpha) {
@@ -104,13 +121,29 @@ struct Lobes {
   float exponent;
 };
 
-// glTF coupling: f = (1 - F) rho / pi + F D V.
-vec3 brdf(Lobes s, vec3 n, vec3 l, vec3 v, float nl, float nv) {
+// glTF coupling: f = (1 - F) rho / pi + F D V, the specular lobe times `ms` (the
+// multiple-scattering factor 1 + F0 (1/E_ss - 1), or 1).
+vec3 brdf(Lobes s, vec3 n, vec3 l, vec3 v, float nl, float nv, vec3 ms) {
   vec3 h = normalize(l + v);
   float nh = clamp(dot(n, h), 0.0, 1.0);
   float vh = clamp(dot(v, h), 0.0, 1.0);
   vec3 F = schlick(s.f0, s.f90, s.exponent, vh);
-  return (vec3(1.0) - F) * s.rho * (1.0 / PI) + F * (ggx_d(n, h, nh, s.alpha) * smith_v(nl, nv, s.alpha));
+  return (vec3(1.0) - F) * s.rho * (1.0 / PI) + F * ms * (ggx_d(n, h, nh, s.alpha) * smith_v(nl, nv, s.alpha));
+}
+
+// Environment light, split sum (brdf::environment_response line for line). k: s0, s1, d1
+// of the ambient table; radiance prefiltered around the reflection; irradiance in lux.
+vec3 environment_light(Lobes s, vec3 k, vec3 radiance, vec3 irradiance, bool compensate) {
+  vec3 fss_ess = s.f0 * k.x + vec3(s.f90 * k.y);
+  vec3 diffuse_light = irradiance * (1.0 / PI);
+  if (!compensate) {
+    vec3 kd = (vec3(1.0) - s.f0) * (1.0 - k.z) + vec3((1.0 - s.f90) * k.z);
+    return fss_ess * radiance + s.rho * kd * diffuse_light;
+  }
+  float ems = 1.0 - (k.x + k.y);
+  vec3 f_avg = s.f0 + (vec3(s.f90) - s.f0) * (1.0 / 21.0);  // Fdez-Aguera 2019 eq. 12
+  vec3 f_ms_ems = fss_ess * f_avg * ems / (vec3(1.0) - f_avg * ems);
+  return fss_ess * radiance + f_ms_ems * diffuse_light + s.rho * (vec3(1.0) - fss_ess - f_ms_ems) * diffuse_light;
 }
 
 // Metals against a medium n1 from F0 in air and the real IOR n (materials.cpp).
@@ -136,6 +169,8 @@ layout(binding = UNIT_EMISSIVE) uniform sampler2D u_emissive;
 layout(binding = UNIT_OCCLUSION) uniform sampler2D u_occlusion;
 layout(binding = UNIT_SHADOW) uniform sampler2DShadow u_shadow;
 layout(binding = UNIT_AMBIENT) uniform sampler2D u_ambient;
+layout(binding = UNIT_ENV_SPECULAR) uniform samplerCube u_env_specular;
+layout(binding = UNIT_ENV_IRRADIANCE) uniform samplerCube u_env_irradiance;
 
 // 3x3 PCF over the hardware 2x2 comparison; normal offset against acne.
 float shadow_visibility(vec3 p, vec3 ng, vec3 l) {
@@ -168,6 +203,25 @@ vec3 ambient_terms(float nv, float roughness) {
   vec3 a = mix(texelFetch(u_ambient, ivec2(i0.x, i0.y), 0).rgb, texelFetch(u_ambient, ivec2(i1.x, i0.y), 0).rgb, t.x);
   vec3 b = mix(texelFetch(u_ambient, ivec2(i0.x, i1.y), 0).rgb, texelFetch(u_ambient, ivec2(i1.x, i1.y), 0).rgb, t.x);
   return mix(a, b, t.y);
+}
+
+// Frostbite's dominant direction of the specular lobe (Lagarde & de Rousiers 2014,
+// §4.9.3): rough lobes lean from the mirror direction toward the normal.
+vec3 specular_dominant_direction(vec3 n, vec3 r, float alpha) {
+  float smooth_ = clamp(1.0 - alpha, 0.0, 1.0);
+  return normalize(mix(n, r, smooth_ * (sqrt(smooth_) + alpha)));
+}
+
+// Radiance around r and irradiance on n from the environment (mode ENV_UNIFORM or ENV_MAP).
+void environment_lookup(vec3 n, vec3 r, float roughness, out vec3 radiance, out vec3 irradiance) {
+  if (int(env_params.z) == ENV_UNIFORM) {
+    radiance = ambient_nits.rgb;
+    irradiance = PI * ambient_nits.rgb;
+    return;
+  }
+  mat3 rot = mat3(env_rotation);
+  radiance = textureLod(u_env_specular, rot * r, roughness * env_params.y).rgb * env_params.x;
+  irradiance = texture(u_env_irradiance, rot * n).rgb * env_params.x;
 }
 
 vec3 shading_normal(vec3 ng, bool back) {
@@ -212,6 +266,11 @@ void main() {
   s.alpha = roughness * roughness;
   s.exponent = extra.x;
 
+  vec3 k = ambient_terms(nv, roughness);  // x: s0, y: s1, z: d1
+  bool compensate = options.x > 0.5;
+  // Kulla & Conty via Filament: the specular lobe times 1 + F0 (1/E_ss - 1), E_ss = s0 + s1.
+  vec3 ms = compensate ? vec3(1.0) + s.f0 * (1.0 / max(k.x + k.y, 1e-4) - 1.0) : vec3(1.0);
+
   vec3 color = vec3(0.0);
   int count = int(params.z);
   for (int i = 0; i < count; ++i) {
@@ -234,16 +293,16 @@ void main() {
     float nl = clamp(dot(n, l), 0.0, 1.0);
     if (nl <= 0.0) continue;
     if (li.spot.z > 0.5 && params.w > 0.5) e *= shadow_visibility(v_world, ng, l);
-    color += brdf(s, n, l, v, nl, nv) * e * nl;  // RTR4 eq. 9.14 with c_light = E / pi
+    color += brdf(s, n, l, v, nl, nv, ms) * e * nl;  // RTR4 eq. 9.14 with c_light = E / pi
   }
 
-  if (ambient_nits.w > 0.5) {
-    vec3 k = ambient_terms(nv, roughness);  // x: s0, y: s1, z: d1
-    vec3 diffuse = s.rho * ((vec3(1.0) - s.f0) * (1.0 - k.z) + (1.0 - s.f90) * k.z);
-    vec3 specular = s.f0 * k.x + s.f90 * k.y;
+  if (int(env_params.z) != ENV_NONE) {
+    vec3 r = specular_dominant_direction(n, reflect(-v, n), s.alpha);
+    vec3 radiance, irradiance;
+    environment_lookup(n, r, roughness, radiance, irradiance);
     float ao = 1.0;
     if ((flags.x & TEX_OCCLUSION) != 0) ao = 1.0 + extra.z * (texture(u_occlusion, v_uv).r - 1.0);
-    color += ambient_nits.rgb * (diffuse + specular) * (ao * extra.w);
+    color += environment_light(s, k, radiance, irradiance, compensate) * (ao * extra.w);
   }
 
   vec3 emission = emissive_nits.rgb;
@@ -253,6 +312,96 @@ void main() {
   // Pre-exposure keeps FP16 targets in range (the readback divides it out); the clamp
   // makes an FP16 overflow read 65504 on every GPU (llvmpipe clamps, others give Inf).
   o_color = vec4(min(color * params.x, vec3(shadow_params.z)), flags.y == 2 ? base.a : 1.0);
+}
+)";
+
+// The environment behind everything: a full-screen triangle on the far plane (drawn
+// where the depth buffer is still clear), the view ray through each pixel looking up the
+// equirectangular map, plus the sky's sun disc at its physical radiance.
+constexpr const char* kBackgroundVertex = R"(
+out vec2 v_ndc;
+void main() {
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  v_ndc = p;
+  gl_Position = vec4(p, 1.0, 1.0);
+}
+)";
+
+constexpr const char* kBackgroundFragment = R"(
+in vec2 v_ndc;
+layout(location = 0) out vec4 o_color;
+layout(binding = UNIT_ENV_BACKGROUND) uniform sampler2D u_background;
+void main() {
+  vec4 far_point = inv_view_proj * vec4(v_ndc, 1.0, 1.0);
+  vec3 dir = normalize(far_point.xyz / far_point.w - camera_pos.xyz);
+  vec3 c = textureLod(u_background, equirect_uv(mat3(env_rotation) * dir), env_params.w).rgb * env_params.x;
+  if (sun_radiance.w > 0.5 && dot(dir, sun_disc.xyz) >= sun_disc.w) c += sun_radiance.rgb;
+  o_color = vec4(min(c * params.x, vec3(shadow_params.z)), 1.0);
+}
+)";
+
+// Cube-map faces for the prefilter passes: the view direction of a face texel
+// (environment.hpp's cube_faces(), passed in as uniforms).
+constexpr const char* kCubeFace = R"(
+in vec2 v_uv;
+layout(location = 0) out vec4 o_color;
+uniform vec3 u_major;
+uniform vec3 u_s_axis;
+uniform vec3 u_t_axis;
+vec3 face_direction() {
+  return normalize(u_major + u_s_axis * (2.0 * v_uv.x - 1.0) + u_t_axis * (2.0 * v_uv.y - 1.0));
+}
+)";
+
+constexpr const char* kEquirectToCube = R"(
+layout(binding = 0) uniform sampler2D u_equirect;
+uniform float u_lod;  // the source level whose texels match the face's
+void main() { o_color = vec4(textureLod(u_equirect, equirect_uv(face_direction()), u_lod).rgb, 1.0); }
+)";
+
+// GGX prefiltering with n = v = r (the split sum, Karis 2013), importance-sampled over a
+// Hammersley set and weighted by n.l as Karis does, each sample read from the source mip
+// whose texels match the sample's solid angle (filtered importance sampling, Krivanek &
+// Colbert 2008, with their +1 bias): few samples, no fireflies from small bright
+// sources. Weighting by Smith's G2 instead (exact at normal view) measured worse against
+// Monte Carlo over a whole sphere (tests/shading/environment_render_test.cpp).
+constexpr const char* kPrefilterGgx = R"(
+layout(binding = 0) uniform samplerCube u_source;
+uniform float u_alpha;     // GGX alpha of this level; 0 copies the source
+uniform int u_samples;
+uniform float u_texel_sr;  // solid angle of a level-0 source texel
+uniform float u_max_lod;
+void main() {
+  vec3 n = face_direction();
+  if (u_alpha <= 0.0) {
+    o_color = vec4(textureLod(u_source, n, 0.0).rgb, 1.0);
+    return;
+  }
+  vec3 up = abs(n.y) < 0.999 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+  vec3 tx = normalize(cross(up, n));
+  vec3 ty = cross(n, tx);
+  float a2 = u_alpha * u_alpha;
+  uint count = uint(u_samples);
+  vec3 sum = vec3(0.0);
+  float weight = 0.0;
+  for (uint i = 0u; i < count; ++i) {
+    float u1 = (float(i) + 0.5) / float(count);
+    float u2 = float(bitfieldReverse(i)) * 2.3283064365386963e-10;
+    float denom = 1.0 + (a2 - 1.0) * u1;
+    float cos2 = (1.0 - u1) / denom, sin2 = a2 * u1 / denom;  // h ~ D(h) (n.h)
+    float cos_h = sqrt(cos2);
+    float phi = 2.0 * PI * u2;
+    vec3 h = (tx * cos(phi) + ty * sin(phi)) * sqrt(sin2) + n * cos_h;
+    vec3 l = 2.0 * cos_h * h - n;
+    float nl = dot(n, l);
+    if (nl <= 0.0) continue;
+    float q = a2 * cos2 + sin2;
+    float pdf = a2 / (4.0 * PI * q * q);  // D(h) (n.h) / (4 v.h) with v = n
+    float lod = clamp(0.5 * log2(1.0 / (float(count) * pdf * u_texel_sr)) + 1.0, 0.0, u_max_lod);
+    sum += textureLod(u_source, l, lod).rgb * nl;
+    weight += nl;
+  }
+  o_color = vec4(sum / max(weight, 1e-8), 1.0);
 }
 )";
 
@@ -312,7 +461,11 @@ std::string head(const GlApi& gl) { return glsl_preamble(gl) + constants(); }
 }  // namespace
 
 std::string lit_vertex(const GlApi& gl) { return head(gl) + kBlocks + kLitVertex; }
-std::string lit_fragment(const GlApi& gl) { return head(gl) + kBlocks + kBrdf + kLitFragment; }
+std::string lit_fragment(const GlApi& gl) { return head(gl) + kBlocks + kMath + kBrdf + kLitFragment; }
+std::string background_vertex(const GlApi& gl) { return glsl_preamble(gl) + kBackgroundVertex; }
+std::string background_fragment(const GlApi& gl) { return head(gl) + kBlocks + kMath + kBackgroundFragment; }
+std::string equirect_to_cube_fragment(const GlApi& gl) { return head(gl) + kMath + kCubeFace + kEquirectToCube; }
+std::string prefilter_ggx_fragment(const GlApi& gl) { return head(gl) + kMath + kCubeFace + kPrefilterGgx; }
 std::string shadow_vertex(const GlApi& gl) { return head(gl) + kBlocks + kShadowVertex; }
 std::string shadow_fragment(const GlApi& gl) { return glsl_preamble(gl) + kShadowFragment; }
 std::string fullscreen_vertex(const GlApi& gl) { return glsl_preamble(gl) + std::string(fullscreen_vertex_body()); }

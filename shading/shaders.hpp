@@ -17,6 +17,13 @@ std::string fullscreen_vertex(const GlApi& gl);
 // MSAA resolve weighted by 1 / (1 + exposure * luma) (RTR4 §5.4.2, Karis 2014): bright
 // samples no longer dominate an edge pixel, so edges survive tone mapping.
 std::string resolve_fragment(const GlApi& gl);
+// The environment behind the scene (equirectangular map + the sky's sun disc).
+std::string background_vertex(const GlApi& gl);
+std::string background_fragment(const GlApi& gl);
+// Environment prefiltering (full-screen passes into cube-map faces): the equirectangular
+// map resampled into a cube, and the GGX-prefiltered mip chain of that cube.
+std::string equirect_to_cube_fragment(const GlApi& gl);
+std::string prefilter_ggx_fragment(const GlApi& gl);
 // Block means of the frame for a reduced readback (exposure metering), undoing pre-exposure.
 std::string reduce_fragment(const GlApi& gl);
 

@@ -182,3 +182,18 @@ TEST(Brdf, AmbientTermsOfAWhiteLambertAddUpToOne) {
 
 }  // namespace
 }  // namespace hdrd::shading
+
+namespace hdrd::shading {
+namespace {
+
+TEST(Brdf, AmbientTableSpecularIsTheDirectionalAlbedoWithFOne) {
+  // The split-sum table's s0 + s1 is E_ss, the quantity energy compensation divides by.
+  for (double r : {0.1, 0.5, 1.0})
+    for (double nv : {0.1, 0.5, 1.0}) {
+      const auto t = brdf::ambient_terms(nv, r, 1024);
+      EXPECT_NEAR(t.s0 + t.s1, brdf::single_scatter_albedo(nv, r, 4096), 3e-3) << "r " << r << " n.v " << nv;
+    }
+}
+
+}  // namespace
+}  // namespace hdrd::shading

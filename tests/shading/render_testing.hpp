@@ -14,14 +14,19 @@ namespace hdrd::shading::testing {
 struct SharedRenderer {
   std::unique_ptr<Renderer> renderer;
   std::string why_not;
+  bool broken = false;  // a context exists but the renderer failed (e.g. a shader): fail, never skip
 };
 
 inline SharedRenderer& shared_renderer() {
   static SharedRenderer s = [] {
     SharedRenderer r;
     auto c = Renderer::create(Backend::automatic);
-    if (c) r.renderer = std::move(*c);
-    else r.why_not = c.error().message;
+    if (c) {
+      r.renderer = std::move(*c);
+    } else {
+      r.why_not = c.error().message;
+      r.broken = c.error().code == "gl.shader";
+    }
     return r;
   }();
   return s;
@@ -42,6 +47,7 @@ inline double luma(const float* p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.07
 
 #define HDRD_REQUIRE_RENDERER(var)                                                        \
   auto& var##_shared = ::hdrd::shading::testing::shared_renderer();                       \
+  if (var##_shared.broken) FAIL() << "renderer set-up failed: " << var##_shared.why_not;   \
   if (!var##_shared.renderer) GTEST_SKIP() << "no GL context: " << var##_shared.why_not;  \
   ::hdrd::shading::Renderer& var = *var##_shared.renderer;                              \
   (void)var

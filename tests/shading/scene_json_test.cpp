@@ -141,6 +141,73 @@ TEST(SceneJson, BadInputNamesTheField) {
   }
 }
 
+TEST(SceneJson, EnvironmentFileAndSky) {
+  SceneLoadOptions o;
+  o.base_dir = "/assets/scenes";
+  json j = minimal();
+  j["environment"] = {{"file", "maps/studio.exr"}, {"scale", 250}, {"rotation_deg", -30}};
+  auto s = parse_scene_json(j, o);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_TRUE(s->environment.has_value());
+  EXPECT_EQ(s->environment->file, std::filesystem::path("/assets/scenes/maps/studio.exr"));  // next to the scene
+  EXPECT_EQ(s->environment->scale, 250);
+  EXPECT_EQ(s->environment->rotation_deg, -30);
+  EXPECT_FALSE(s->environment->sky.has_value());
+  j["environment"] = {{"file", "/abs/sky.hdr"}};
+  s = parse_scene_json(j, o);
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(s->environment->file, std::filesystem::path("/abs/sky.hdr"));
+  EXPECT_EQ(s->environment->scale, 1);
+  j["environment"] = {{"sky", {{"sun_elevation_deg", 12}, {"sun_azimuth_deg", 200}, {"turbidity", 4}, {"sun", false}}}};
+  s = parse_scene_json(j, o);
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_TRUE(s->environment->sky.has_value());
+  EXPECT_EQ(s->environment->sky->sun_elevation_deg, 12);
+  EXPECT_EQ(s->environment->sky->sun_azimuth_deg, 200);
+  EXPECT_EQ(s->environment->sky->turbidity, 4);
+  EXPECT_EQ(s->environment->sky->ground_albedo, SkyParams{}.ground_albedo);
+  EXPECT_FALSE(s->environment->sky->sun);
+  j["environment"] = {{"sky", json::object()}};
+  s = parse_scene_json(j, o);
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(s->environment->sky->sun_elevation_deg, SkyParams{}.sun_elevation_deg);
+}
+
+TEST(SceneJson, BadEnvironmentNamesTheField) {
+  const BadCase cases[] = {
+      {"not an object", [](json& j) { j["environment"] = "sky"; }, "environment"},
+      {"neither", [](json& j) { j["environment"] = {{"scale", 2}}; }, "environment"},
+      {"both", [](json& j) { j["environment"] = {{"file", "a.exr"}, {"sky", json::object()}}; }, "environment"},
+      {"unknown field", [](json& j) { j["environment"] = {{"file", "a.exr"}, {"intensity", 2}}; }, "environment.intensity"},
+      {"empty file", [](json& j) { j["environment"] = {{"file", ""}}; }, "environment.file"},
+      {"file number", [](json& j) { j["environment"] = {{"file", 3}}; }, "environment.file"},
+      {"negative scale", [](json& j) { j["environment"] = {{"file", "a.exr"}, {"scale", -1}}; }, "environment.scale"},
+      {"rotation", [](json& j) { j["environment"] = {{"file", "a.exr"}, {"rotation_deg", 1e6}}; }, "environment.rotation_deg"},
+      {"sky field", [](json& j) { j["environment"] = {{"sky", {{"elevation", 10}}}}; }, "environment.sky.elevation"},
+      {"sun below horizon", [](json& j) { j["environment"] = {{"sky", {{"sun_elevation_deg", -5}}}}; }, "environment.sky.sun_elevation_deg"},
+      {"turbidity", [](json& j) { j["environment"] = {{"sky", {{"turbidity", 1}}}}; }, "environment.sky.turbidity"},
+      {"albedo", [](json& j) { j["environment"] = {{"sky", {{"ground_albedo", 2}}}}; }, "environment.sky.ground_albedo"},
+      {"sun flag", [](json& j) { j["environment"] = {{"sky", {{"sun", 1}}}}; }, "environment.sky.sun"},
+      {"and ambient", [](json& j) { j["environment"] = {{"sky", json::object()}}; j["ambient_nits"] = 100; }, "ambient_nits"},
+  };
+  for (const BadCase& c : cases) {
+    json j = minimal();
+    c.edit(j);
+    auto s = parse_scene_json(j);
+    ASSERT_FALSE(s.ok()) << c.name;
+    EXPECT_EQ(s.error().field, c.field) << c.name << ": " << s.error().message;
+    EXPECT_EQ(s.error().message.find('\n'), std::string::npos);
+  }
+  SceneLoadOptions no_files;
+  no_files.allow_files = false;
+  json j = minimal();
+  j["environment"] = {{"file", "studio.exr"}};
+  auto s = parse_scene_json(j, no_files);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().field, "environment.file");
+  EXPECT_NE(s.error().message.find("not allowed"), std::string::npos);
+}
+
 TEST(SceneJson, TriangleBudgetIsCheckedBeforeBuilding) {
   SceneLoadOptions o;
   o.limits.max_triangles = 100000;
