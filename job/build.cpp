@@ -171,6 +171,29 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
     cam.yfov_deg = r.optional_number("camera.fov_y_deg");
     rq.camera = cam;
   }
+  // The world's light: a map file or the sky (any sky field given), else the scene's own.
+  const bool sky = !r.is_null("environment.sky.sun_elevation_deg") || !r.is_null("environment.sky.sun_azimuth_deg") ||
+                   !r.is_null("environment.sky.turbidity") || !r.is_null("environment.sky.ground_albedo") ||
+                   !r.is_null("environment.sky.sun");
+  const std::string env_file = r.text("environment.file");
+  const double env_scale = r.number("environment.scale"), env_rotation = r.number("environment.rotation_deg");
+  if (sky || !env_file.empty()) {
+    shading::EnvironmentSpec env;
+    env.file = env_file;
+    if (sky) {
+      shading::SkyParams p;
+      p.sun_elevation_deg = r.optional_number("environment.sky.sun_elevation_deg").value_or(p.sun_elevation_deg);
+      p.sun_azimuth_deg = r.optional_number("environment.sky.sun_azimuth_deg").value_or(p.sun_azimuth_deg);
+      p.turbidity = r.optional_number("environment.sky.turbidity").value_or(p.turbidity);
+      p.ground_albedo = r.optional_number("environment.sky.ground_albedo").value_or(p.ground_albedo);
+      if (!r.is_null("environment.sky.sun")) p.sun = r.boolean("environment.sky.sun");
+      env.sky = p;
+    }
+    env.scale = env_scale;
+    env.rotation_deg = env_rotation;
+    rq.environment = env;
+  }
+  rq.energy_compensation = r.boolean("energy_compensation");
   rq.load.base_dir = options.scene_base_dir;
   rq.load.allow_files = options.scene_files;
   rq.load.limits.max_lights = options.max_lights;

@@ -212,7 +212,10 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
                     {"samples", r->samples},
                     {"render_ms", r->render_ms},
                     {"dominant_illuminance_lux", r->dominant_illuminance_lux},
-                    {"triangles", r->triangles}};
+                    {"triangles", r->triangles},
+                    {"environment", r->environment},
+                    {"environment_ms", r->environment_ms},
+                    {"energy_compensation", rq.energy_compensation}};
 
   SceneInput meter;
   meter.image = &r->metering_nits;

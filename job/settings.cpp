@@ -197,6 +197,36 @@ std::vector<Setting> make_table() {
       {.path = "samples", .type = T::integer, .sources = kRender, .doc = "MSAA samples, 1 = off (the renderer caps at 16)",
        .min = 1, .max = 64, .default_json = "4", .flag = "--samples", .metavar = "N", .query = "samples",
        .size_limit = true},
+      // ---- light from the world (docs/rendering.md "Environment") ----
+      {.path = "environment.file", .type = T::path, .sources = kRender,
+       .doc = "Equirectangular environment map (.exr, .hdr) lighting the scene; replaces its environment and ambient",
+       .default_doc = "the scene's", .flag = "--environment", .metavar = "FILE", .max_length = 4096},
+      {.path = "environment.scale", .type = T::number, .sources = kRender,
+       .doc = "Environment radiance multiplier: EXR value x whiteLuminance x scale = cd/m2 (no whiteLuminance, .hdr: "
+              "value x scale)",
+       .min = 0, .max = 1e9, .default_json = "1", .flag = "--environment-scale", .metavar = "K"},
+      {.path = "environment.rotation_deg", .type = T::number, .sources = kRender,
+       .doc = "Turns the environment about +y, in the sense of growing azimuth", .unit = "deg", .min = -3600,
+       .max = 3600, .default_json = "0", .flag = "--environment-rotation", .metavar = "DEG"},
+      {.path = "environment.sky.sun_elevation_deg", .type = T::number, .sources = kRender,
+       .doc = "Preetham sky: sun elevation (any environment.sky field, or --sky, lights the scene by the sky)",
+       .unit = "deg", .min = 0, .max = 90, .default_doc = "45 (with a sky)", .flag = "--sky-elevation",
+       .metavar = "DEG"},
+      {.path = "environment.sky.sun_azimuth_deg", .type = T::number, .sources = kRender,
+       .doc = "Preetham sky: sun azimuth, from -z toward +x", .unit = "deg", .min = -360, .max = 360,
+       .default_doc = "0 (with a sky)", .flag = "--sky-azimuth", .metavar = "DEG"},
+      {.path = "environment.sky.turbidity", .type = T::number, .sources = kRender,
+       .doc = "Preetham sky: turbidity, 2 very clear .. 10 very hazy", .min = 1.7, .max = 10,
+       .default_doc = "2.5 (with a sky)", .flag = "--sky-turbidity", .metavar = "T"},
+      {.path = "environment.sky.ground_albedo", .type = T::number, .sources = kRender,
+       .doc = "Preetham sky: albedo of the ground below the horizon", .min = 0, .max = 1,
+       .default_doc = "0.2 (with a sky)", .flag = "--sky-ground-albedo", .metavar = "A"},
+      {.path = "environment.sky.sun", .type = T::boolean, .sources = kRender,
+       .doc = "Preetham sky: the sun as a shadowing light and a disc (false: the sky dome only)",
+       .default_doc = "true (with a sky)", .flag = "--no-sky-sun"},
+      {.path = "energy_compensation", .type = T::boolean, .sources = kRender,
+       .doc = "GGX multiple-scattering energy compensation (false: single scattering, for comparison)",
+       .default_json = "true", .flag = "--no-energy-compensation", .query = "energy_compensation"},
       {.path = "camera.position", .type = T::vec3, .sources = kRender, .doc = "Camera position (scene units, metres)",
        .max = 1e6, .default_doc = "the scene's", .flag = "--camera-position", .metavar = "X,Y,Z"},
       {.path = "camera.target", .type = T::vec3, .sources = kRender, .doc = "Point the camera looks at", .max = 1e6,
@@ -374,11 +404,37 @@ json expand_ui_pos(std::string_view text, std::string* error) {
   return {{"ui", {{"x", xy[0]}, {"y", xy[1]}}}};
 }
 
+// --sky ELEV[,AZIM[,TURBIDITY]] (degrees): the Preetham sky and its sun.
+json expand_sky(std::string_view text, std::string* error) {
+  static constexpr const char* kKeys[] = {"sun_elevation_deg", "sun_azimuth_deg", "turbidity"};
+  json sky = json::object();
+  std::size_t pos = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto comma = text.find(',', pos);
+    const std::string_view part = text.substr(pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos);
+    double v = 0;
+    const auto [p, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
+    if (part.empty() || ec != std::errc() || p != part.data() + part.size()) {
+      *error = "expected ELEV[,AZIM[,TURBIDITY]] in degrees";
+      return nullptr;
+    }
+    sky[kKeys[i]] = v;
+    if (comma == std::string_view::npos) return {{"environment", {{"sky", sky}}}};
+    pos = comma + 1;
+  }
+  *error = "expected at most three numbers, ELEV[,AZIM[,TURBIDITY]]";
+  return nullptr;
+}
+
+constexpr std::string_view kSkyPaths[] = {"environment.sky.sun_elevation_deg", "environment.sky.sun_azimuth_deg",
+                                          "environment.sky.turbidity"};
 constexpr std::string_view kCameraPaths[] = {"camera.position", "camera.target", "camera.fov_y_deg"};
 constexpr std::string_view kUiPosPaths[] = {"ui.x", "ui.y"};
 const Composite kComposites[] = {
     {"--camera", "P[:T[:FOV]]", "Camera px,py,pz[:tx,ty,tz[:fov_deg]] (camera.position, .target, .fov_y_deg)",
      kRender, kCameraPaths, &expand_camera},
+    {"--sky", "ELEV[,AZIM[,TURB]]", "Light by the Preetham sky and its sun (environment.sky.*)", kRender, kSkyPaths,
+     &expand_sky},
     {"--ui-pos", "X,Y", "Overlay top-left in output pixels (ui.x, ui.y)", kSceneReferred, kUiPosPaths, &expand_ui_pos},
 };
 
