@@ -50,13 +50,9 @@ void put_u32(std::vector<std::uint8_t>& v, std::uint32_t x) {
   put_u16(v, x & 0xffff);
 }
 
-std::uint32_t to_units(double value, double unit, double max, bool round_up) {
+std::uint32_t to_units(double value, double unit, double max) {
   if (!(value > 0)) return 0;  // also NaN
-  const double units = value / unit;
-  // Round up so the container never states less than was measured (REFERENCE.md §6);
-  // the small slack keeps exact values such as 123.45 cd/m2 from rounding to the next unit.
-  const double r = round_up ? std::ceil(units - 1e-6) : std::round(units);
-  return static_cast<std::uint32_t>(std::min(r, max));
+  return static_cast<std::uint32_t>(std::min(std::round(value / unit), max));
 }
 
 // H.273 code points. SDR: 13 = IEC 61966-2-1 sRGB; 4 = BT.470 System M, "assumed display
@@ -77,25 +73,22 @@ std::array<std::uint8_t, 4> cicp_for(const DisplayTarget& t) {
 std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
   for (color::Chromaticity c : {m.primaries.red, m.primaries.green, m.primaries.blue, m.primaries.white}) {
-    put_u16(v, to_units(c.x, 0.00002, 65535, false));
-    put_u16(v, to_units(c.y, 0.00002, 65535, false));
+    put_u16(v, to_units(c.x, 0.00002, 65535));
+    put_u16(v, to_units(c.y, 0.00002, 65535));
   }
-  put_u32(v, to_units(m.max_nits, 0.0001, 4294967295.0, false));
-  put_u32(v, to_units(m.min_nits, 0.0001, 4294967295.0, false));
+  put_u32(v, to_units(m.max_nits, 0.0001, 4294967295.0));
+  put_u32(v, to_units(m.min_nits, 0.0001, 4294967295.0));
   return v;
 }
 
-// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up. 0 means "unknown" and some
-// displays misbehave on it, so a value that would be 0 becomes the mastering peak
-// (REFERENCE.md §6), as in the KMS metadata blob (display/hdr_metadata.cpp).
+// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2: the values every container carries
+// (carried_light_level, encode/frame.hpp), so the PNG states what the sidecar and the KMS
+// metadata state (a black frame: the mastering peak, not 0).
 std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
-  auto carried = [&](double nits) {
-    const auto units = to_units(nits, 0.0001, 4294967295.0, true);
-    return units != 0 ? units : to_units(m.max_nits, 0.0001, 4294967295.0, true);
-  };
-  put_u32(v, carried(l.max_cll_nits));
-  put_u32(v, carried(l.max_fall_nits));
+  const CarriedLightLevel c = carried_light_level(l, m);
+  put_u32(v, static_cast<std::uint32_t>(c.max_cll_nits) * 10000u);
+  put_u32(v, static_cast<std::uint32_t>(c.max_fall_nits) * 10000u);
   return v;
 }
 
