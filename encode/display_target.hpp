@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "encode/colour/color.hpp"
+#include "encode/colour/sdr_content.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd {
@@ -37,6 +38,9 @@ struct DisplayTarget {
   double paper_white_nits = 203.0;   // luminance of relative 1.0
   double ui_white_nits = 203.0;      // luminance of UI white
   double sdr_white_nits = 203.0;     // where SDR content's white lands in an HDR frame
+  // How SDR content placed in the frame (the UI overlay, SDR images) decodes to light:
+  // the EOTF of the display it was mastered on (encode/colour/sdr_content.hpp).
+  SdrEotf sdr_content_eotf = SdrEotf::srgb;
   Range range = Range::full;
   SdrCurve sdr_curve = SdrCurve::srgb;
   int bits = 10;                     // 10 for hdr10/hlg; 8 or 10 for SDR; 16 (half) for scrgb
