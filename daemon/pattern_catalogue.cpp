@@ -23,6 +23,7 @@ constexpr PatternParam kWindow[] = {kLevel, kArea};
 constexpr PatternParam kNearBlack[] = {kNearBlackSteps, kLabels};
 constexpr PatternParam kClipping[] = {kLevel, kLabels};
 constexpr PatternParam kSdrGrey[] = {kRampSteps, kLabels};
+constexpr PatternParam kSdrShadows[] = {kLabels};
 // BT.2111-2 defines bars for PQ and HLG only.
 constexpr Mode kBt2111Modes[] = {Mode::hdr10, Mode::hlg};
 
@@ -33,6 +34,7 @@ constexpr PatternEntry kPatterns[] = {
     {"near-black", kNearBlack, {}},
     {"clipping", kClipping, {}},
     {"sdr-grey", kSdrGrey, {}},
+    {"sdr-shadows", kSdrShadows, {}},
 };
 
 std::string_view type_name(T t) {

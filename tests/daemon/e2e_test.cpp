@@ -165,8 +165,9 @@ TEST(DaemonE2E, GetEndpoints) {
   EXPECT_GT(j["limits"]["max_width"].get<int>(), 0);
   std::set<std::string> patterns;
   for (const auto& p : j["patterns"]) patterns.insert(p["name"]);
-  EXPECT_EQ(patterns, (std::set<std::string>{"bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey"}))
-      << "issue 7's patterns";
+  EXPECT_EQ(patterns, (std::set<std::string>{"bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey",
+                                             "sdr-shadows"}))
+      << "issue 7's patterns and issue 15's sdr-shadows";
 
   auto disp = get(c, "/v1/displays");
   ASSERT_EQ(disp.status, 200) << disp.body;
