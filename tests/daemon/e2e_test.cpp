@@ -474,7 +474,7 @@ TEST(DaemonE2E, MalformedRequestsGetTheRightErrors) {
     ASSERT_TRUE(r.ok()) << m.name << ": " << r.error().message;
     EXPECT_EQ(r->status, m.status) << m.name << ": " << r->body;
     EXPECT_EQ(error_code(*r).rfind(m.code, 0), 0u) << m.name << ": " << error_code(*r);
-    if (m.status == 405) EXPECT_NE(r->header("allow"), nullptr) << m.name;
+    if (m.status == 405) { EXPECT_NE(r->header("allow"), nullptr) << m.name; }
     auto ok = get(c, "/v1/status");
     ASSERT_EQ(ok.status, 200) << "after " << m.name << "\n" << d.log();
   }
@@ -861,7 +861,7 @@ TEST(DaemonE2E, SelftestHdr10At1000NitsPasses) {
   }
   EXPECT_TRUE(names.count("paper-white/clip"));
   const bool rendered = json::parse(get(c, "/v1/status").body)["renderer"]["available"].get<bool>();
-  if (rendered) EXPECT_TRUE(names.count("peak/scene-material-grid")) << "the render worker rendered the scenes";
+  if (rendered) { EXPECT_TRUE(names.count("peak/scene-material-grid")) << "the render worker rendered the scenes"; }
   // No body: hdr10 at its default peak. render=false: the scene checks are skipped, not failed.
   auto plain = c.request("POST", "/v1/selftest", "", {});
   ASSERT_TRUE(plain.ok());
@@ -913,7 +913,7 @@ TEST(DaemonE2E, HdrctlAndPythonClient) {
   EXPECT_EQ(png_header(read_file(bars)).cicp, std::string("\x09\x12\x00\x00", 4)) << "HLG, narrow range";
   r = run_command(hdrctl + " pattern --list --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(json::parse(r.out).size(), 6u);
+  EXPECT_EQ(json::parse(r.out).size(), 7u) << "issue 7's six patterns and issue 15's sdr-shadows";
   r = run_command(hdrctl + " pattern bt2111 --mode sdr -o " + (d.dir() / "no.png").string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("display.mode"), std::string::npos) << r.err;
