@@ -15,10 +15,6 @@ std::uint16_t chroma_units(double v) {
 
 std::uint16_t clamp_u16(double v) { return static_cast<std::uint16_t>(std::clamp(v, 0.0, 65535.0)); }
 
-// "Round up to the container's unit" (REFERENCE.md §6). A tiny tolerance keeps 1000.0
-// computed as 1000.0000000002 from becoming 1001.
-std::uint16_t ceil_nits(double nits) { return clamp_u16(std::ceil(nits - 1e-9)); }
-
 bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0; }
 
 void put16(std::uint8_t* p, std::uint16_t v) {
@@ -50,13 +46,11 @@ Result<HdrOutputMetadata> make_hdr_output_metadata(Mode mode, const MasteringDis
   m.white_point = {chroma_units(md.primaries.white.x), chroma_units(md.primaries.white.y)};
   m.max_display_mastering_luminance = clamp_u16(std::round(md.max_nits));
   m.min_display_mastering_luminance = clamp_u16(std::round(md.min_nits * 10000.0));
-  // CTA-861.3: 0 means "unknown"; send the mastering peak instead (REFERENCE.md §6).
-  const std::uint16_t peak = std::max<std::uint16_t>(m.max_display_mastering_luminance, 1);
-  m.max_cll = ceil_nits(light.max_cll_nits);
-  m.max_fall = ceil_nits(light.max_fall_nits);
-  if (m.max_cll == 0) m.max_cll = peak;
-  if (m.max_fall == 0) m.max_fall = peak;
-  m.max_fall = std::min(m.max_fall, m.max_cll);  // a frame average cannot exceed the brightest pixel
+  // The values every container carries (encode/frame.hpp: rounded up; 0, CTA-861.3's
+  // "unknown", becomes the mastering peak).
+  const CarriedLightLevel carried = carried_light_level(light, md);
+  m.max_cll = carried.max_cll_nits;
+  m.max_fall = carried.max_fall_nits;
   return m;
 }
 

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "encode/colour/color.hpp"
+#include "encode/colour/sdr_content.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd {
@@ -82,6 +83,9 @@ struct DisplayTarget {
   double paper_white_nits = 203.0;   // luminance of relative 1.0
   double ui_white_nits = 203.0;      // luminance of UI white
   double sdr_white_nits = 203.0;     // where SDR content's white lands in an HDR frame
+  // How SDR content placed in the frame (the UI overlay, SDR images) decodes to light:
+  // the EOTF of the display it was mastered on (encode/colour/sdr_content.hpp).
+  SdrEotf sdr_content_eotf = SdrEotf::srgb;
   Range range = Range::full;
   SdrCurve sdr_curve = SdrCurve::srgb;
   int bits = 10;                     // 10 for hdr10/hlg; 8 or 10 for SDR; 16 (half) for scrgb
@@ -114,10 +118,11 @@ struct LevelSettings {
   std::optional<double> peak_nits, black_nits, paper_white_nits, ui_white_nits, sdr_white_nits;
   std::optional<Range> range;
   std::optional<SdrCurve> sdr_curve;
+  std::optional<SdrEotf> sdr_content_eotf;
   std::optional<int> bits;
   std::optional<color::Primaries> display_primaries;
   bool any_level() const {
-    return peak_nits || black_nits || paper_white_nits || ui_white_nits || sdr_white_nits || range || sdr_curve || bits;
+    return peak_nits || black_nits || paper_white_nits || ui_white_nits || sdr_white_nits || range || sdr_curve || sdr_content_eotf || bits;
   }
 };
 

@@ -15,12 +15,25 @@
 
 namespace hdrd {
 
-// CTA-861.3 content light level, in cd/m2 (rounded up to 1 cd/m2 when serialised).
+// CTA-861.3 content light level, in cd/m2, as measured from the frame's codes.
 struct ContentLightLevel {
   double max_cll_nits = 0;   // largest max(R,G,B) of any pixel, display-referred container signal
   double max_fall_nits = 0;  // largest frame average of per-pixel max(R,G,B)
 };
 
+// The one rule for what every container carries as MaxCLL / MaxFALL (CTA-861.3,
+// REFERENCE.md §6): whole cd/m2 rounded up, so no container understates the content; a
+// value that would be 0 (a black frame) is the mastering display's peak instead, because
+// CTA-861.3 reads 0 as "unknown" and some sinks mishandle it; MaxFALL at most MaxCLL; at
+// most 65535 (the InfoFrame's u16). The sidecar's `content_light_level`, the PNG cLLI (these
+// values x 10000 in its 0.0001 cd/m2 unit) and the HDR_OUTPUT_METADATA blob all carry exactly
+// these numbers (and so should any video stream's SEI).
+struct CarriedLightLevel {
+  std::uint16_t max_cll_nits = 0;
+  std::uint16_t max_fall_nits = 0;
+  friend bool operator==(CarriedLightLevel, CarriedLightLevel) = default;
+};
+CarriedLightLevel carried_light_level(const ContentLightLevel& measured, const MasteringDisplay& mastering);
 
 struct EncodedFrame {
   DisplayTarget target;

@@ -51,37 +51,102 @@ Mat3 working_to_container(const DisplayTarget& t) {
 }
 
 namespace {
-bool in_gamut(Vec3 c, double peak, double tol) {
+bool in_cube(Vec3 c, double peak, double tol) {
   const double lo = -tol * peak, hi = peak * (1 + tol);
   return c.x >= lo && c.y >= lo && c.z >= lo && c.x <= hi && c.y <= hi && c.z <= hi;
 }
 Vec3 clamp_to(Vec3 c, double peak) {
   return {std::clamp(c.x, 0.0, peak), std::clamp(c.y, 0.0, peak), std::clamp(c.z, 0.0, peak)};
 }
-}  // namespace
 
 // REFERENCE.md §1.5: constant-hue, constant-intensity desaturation in ICtCp toward the
 // achromatic axis until the colour fits [0, peak] in the container; intensity is capped at
-// the peak's (an achromatic colour there always fits). scRGB is not mapped.
-Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g) {
-  const Mat3 to_c = working_to_container(t);
-  Vec3 c = to_c * working_nits;
-  if (t.mode == Mode::scrgb) return c;
-  const double peak = t.peak_nits;
-  if (in_gamut(c, peak, kGamutTolerance)) return clamp_to(c, peak);
-  if (g == GamutMapping::clip) return clamp_to(c, peak);
+// the peak's (an achromatic colour there always fits).
+Vec3 desaturate_into_cube(Vec3 working_nits, const Mat3& to_c, double peak) {
   const Vec3 ictcp = color::rec2020_nits_to_ictcp(
       {std::max(working_nits.x, 0.0), std::max(working_nits.y, 0.0), std::max(working_nits.z, 0.0)});
   const double i = std::min(ictcp.x, transfer::pq_inverse_eotf(peak));
   auto at = [&](double s) { return to_c * color::ictcp_to_rec2020_nits({i, ictcp.y * s, ictcp.z * s}); };
   double lo = 0, hi = 1;
-  if (in_gamut(at(1.0), peak, 1e-6)) return clamp_to(at(1.0), peak);
+  if (in_cube(at(1.0), peak, 1e-6)) return clamp_to(at(1.0), peak);
   for (int it = 0; it < 24; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (in_gamut(at(mid), peak, 1e-6) ? lo : hi) = mid;
+    (in_cube(at(mid), peak, 1e-6) ? lo : hi) = mid;
   }
   return clamp_to(at(lo), peak);
 }
+}  // namespace
+
+// scRGB is not mapped: its negatives carry wide colours.
+Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g) {
+  const Mat3 to_c = working_to_container(t);
+  const Vec3 c = to_c * working_nits;
+  if (t.mode == Mode::scrgb) return c;
+  const double peak = t.peak_nits;
+  if (in_cube(c, peak, kGamutTolerance) || g == GamutMapping::clip) return fit_volume(c, t, g);
+  return fit_volume(desaturate_into_cube(working_nits, to_c, peak), t, g);
+}
+
+// HLG: inside the cube, E = k(Y_D) F_D with a scale k of the luminance alone
+// (HlgDisplay::ootf_inverse_scale), so along the line from F_D to the grey of the same
+// luminance, c(s) = Y_D + s (F_D - Y_D), k stays fixed and the largest s with every
+// k c(s) <= 1 is closed-form: s = min over the channels above Y_D of (1/k - Y_D) / (F_D - Y_D).
+// That keeps the luminance and the dominant wavelength and gives up saturation (the
+// REFERENCE.md §1.5 direction: toward the achromatic axis); 1/k >= Y_D for every Y_D <= peak,
+// so the grey always fits. `clip` clips E per channel instead, which is what a display
+// shows for a signal clipped at 1: hue and luminance change, and the dump says so.
+Vec3 fit_volume(Vec3 c, const DisplayTarget& t, GamutMapping g) {
+  if (t.mode == Mode::scrgb) return c;
+  c = clamp_to(c, t.peak_nits);
+  if (t.mode != Mode::hlg) return c;
+  const auto hd = transfer::HlgDisplay::from_levels(t.peak_nits, t.black_nits);
+  const double yd = color::dot(color::kRec2020Luma, c);
+  const double k = hd.ootf_inverse_scale(yd);
+  if (std::max({c.x, c.y, c.z}) * k <= 1.0 + kGamutTolerance) return c;
+  if (g == GamutMapping::clip)
+    return hd.ootf({std::min(c.x * k, 1.0), std::min(c.y * k, 1.0), std::min(c.z * k, 1.0)});
+  double s = 1.0;
+  for (double v : {c.x, c.y, c.z})
+    if (v > yd) s = std::min(s, (1.0 / k - yd) / (v - yd));
+  s = std::max(s, 0.0);
+  return {yd + s * (c.x - yd), yd + s * (c.y - yd), yd + s * (c.z - yd)};
+}
+
+bool has_black_floor(const DisplayTarget& t) {
+  return t.black_nits > 0 && (t.mode == Mode::sdr_bt1886 || t.mode == Mode::hlg);
+}
+
+Vec3 displayed_light(Vec3 c, const DisplayTarget& t) {
+  if (!has_black_floor(t)) return c;
+  if (t.mode == Mode::sdr_bt1886) {
+    // BT.1886: V = 0 decodes to Lb, and no code decodes below it.
+    const double b = t.black_nits;
+    return {std::max(c.x, b), std::max(c.y, b), std::max(c.z, b)};
+  }
+  // HLG: E' = 0 decodes to the scene light OETF^-1(beta) in that channel (BT.2100 Table 5).
+  const auto hd = transfer::HlgDisplay::from_levels(t.peak_nits, t.black_nits);
+  const double eb = hd.scene_black();
+  const Vec3 e = hd.inverse_ootf(c);
+  if (e.x >= eb && e.y >= eb && e.z >= eb) return c;
+  return hd.ootf({std::max(e.x, eb), std::max(e.y, eb), std::max(e.z, eb)});
+}
+
+namespace {
+// f as a ToneStage table with a toe: the table on [2^min_exp2, 2^max_exp2] with a node on each
+// kink, f(0), and the toe's slope from f(0) to the table's bottom.
+FloatBitsLut toe_table(const std::function<double(double)>& f, int min_exp2, int max_exp2,
+                       const std::vector<double>& kinks, float& zero, float& slope) {
+  FloatBitsLut l(f, min_exp2, max_exp2, kinks);
+  zero = static_cast<float>(f(0.0));
+  slope = static_cast<float>((f(static_cast<double>(l.lo())) - f(0.0)) / l.lo());
+  return l;
+}
+
+std::vector<double> scaled(std::vector<double> v, double by) {
+  for (double& x : v) x *= by;
+  return v;
+}
+}  // namespace
 
 ToneStage build_tone_stage(const PreparedPipeline& p) {
   ToneStage s;
@@ -92,17 +157,25 @@ ToneStage build_tone_stage(const PreparedPipeline& p) {
     s.kind = ToneKind::none;
     return s;
   }
-  const auto* curve = p.curve.get();
+  const std::shared_ptr<const tonemap::Curve> curve = p.curve;
   const double pw = t.paper_white_nits;
-  if (p.curve_info->name == "clip") {
+  if (p.curve_info->name == "clip" && p.apply == tonemap::Apply::per_channel) {
     s.kind = ToneKind::clip;
   } else if (p.apply == tonemap::Apply::per_channel) {
     s.kind = ToneKind::per_channel;
-    s.lut = FloatBitsLut([=](double x) { return curve->map(x) * pw; }, -20, 20);
+    const auto f = [=](double x) { return curve->map(x) * pw; };
+    s.lut = toe_table(f, -20, 20, curve->kinks(), s.zero_nits, s.toe_slope);
   } else if (p.apply == tonemap::Apply::max_rgb || p.apply == tonemap::Apply::luminance) {
     s.kind = ToneKind::ratio;
     s.ratio_of_luminance = p.apply == tonemap::Apply::luminance;
-    s.lut = FloatBitsLut([=](double m) { return curve->map(m) * pw / m; }, -20, 20);
+    s.lut = FloatBitsLut([=](double m) { return curve->shape(m) * pw / m; }, -20, 20, curve->kinks());
+    if (curve->lifts_black()) {
+      // Per channel on the ratio's nits, down to 2^-40 cd/m2 (where the toe's straight line
+      // is 0.06 of a 16-bit PQ step off the lift, which rises as PQ does near 0).
+      const auto lift = [=](double n) { return curve->lift(n / pw) * pw; };
+      s.has_lift = true;
+      s.lift = toe_table(lift, -40, 14, scaled(curve->lift_kinks(), pw), s.lift_zero_nits, s.lift_toe_slope);
+    }
   } else {
     s.kind = ToneKind::reference;
   }
@@ -154,6 +227,20 @@ void fit_code_light(SignalStage& s) {
 }
 }  // namespace
 
+namespace {
+// The bottom octave of a signal table: low enough that the signal there rounds to the same
+// 16-bit PNG sample as the signal of 0 (the table's value below its range is its bottom
+// value), so black is exactly black's sample in every transfer (BT.1886 with Lb = 0 wrote
+// 30 and gamma 2.2 wrote 15 from a bottom at 2^-20 cd/m2).
+int signal_bottom_exp2(const std::function<double(double)>& f, int from) {
+  auto sample = [&](double v) { return std::lround(std::clamp(f(v), 0.0, 1.0) * 65535.0); };
+  const long zero = sample(0.0);
+  int e = from;
+  while (e > -120 && sample(std::ldexp(1.0, e)) != zero) --e;
+  return e;
+}
+}  // namespace
+
 SignalStage build_signal_stage(const DisplayTarget& t) {
   SignalStage s;
   s.mode = t.mode;
@@ -168,6 +255,7 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
   }
   const double peak = t.peak_nits;
   std::function<double(double)> f;
+  std::vector<double> kinks;  // where f's slope jumps (float_lut.hpp)
   int min_exp2 = -20, max_exp2 = 14;
   switch (t.mode) {
     case Mode::hdr10:
@@ -176,26 +264,32 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
       min_exp2 = -30;
       break;
     case Mode::sdr:
-      if (t.sdr_curve == SdrCurve::srgb)
+      if (t.sdr_curve == SdrCurve::srgb) {
         f = [=](double n) { return transfer::srgb_inverse_eotf(std::min(n / peak, 1.0)); };
-      else
+        kinks.push_back(0.0031308 * peak);  // IEC 61966-2-1: the linear toe meets the power (C0 only)
+      } else {
         f = [=](double n) { return transfer::gamma22_inverse_eotf(std::min(n / peak, 1.0)); };
+      }
+      kinks.push_back(peak);
       break;
     case Mode::sdr_bt1886: {
       const auto b = transfer::Bt1886::from_levels(peak, t.black_nits);
       f = [=](double n) { return b.inverse_eotf(n); };
+      kinks = {t.black_nits, peak};  // V clipped to [0, 1]
       break;
     }
     case Mode::hlg:
+      s.hlg = transfer::HlgDisplay::from_levels(peak, t.black_nits);
       s.hlg_peak = static_cast<float>(peak);
-      s.hlg_gamma = static_cast<float>(transfer::hlg_system_gamma(peak));
-      f = [](double e) { return transfer::hlg_oetf(std::min(e, 1.0)); };
+      s.hlg_gamma = static_cast<float>(s.hlg.gamma);
+      f = [hd = s.hlg](double e) { return hd.signal_of_scene(e); };
+      kinks = {1.0, s.hlg.scene_black()};  // E clipped at 1; no signal below the lifted black
       min_exp2 = -30, max_exp2 = 1;
       break;
     case Mode::scrgb:
       break;
   }
-  if (f) s.signal = FloatBitsLut(f, min_exp2, max_exp2);
+  if (f) s.signal = FloatBitsLut(f, signal_bottom_exp2(f, min_exp2), max_exp2, kinks);
   if (f && t.mode != Mode::hlg) {
     const double scale = t.range == Range::narrow ? 219.0 * std::ldexp(1.0, bits - 8) : s.max_code;
     const double offset = t.range == Range::narrow ? 16.0 * std::ldexp(1.0, bits - 8) : 0.0;
@@ -212,9 +306,10 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
     for (int c = 0; c <= s.max_code; ++c) {
       const double e = t.range == Range::narrow ? std::clamp(transfer::dequantize_narrow(c, bits), 0.0, 1.0)
                                                 : transfer::dequantize_full(c, bits);
-      // HLG: the inverse OETF (scene light E); the OOTF is applied per pixel.
+      // HLG: the scene light E the display decodes (black lift included); the OOTF is
+      // applied per pixel.
       s.code_to_nits[static_cast<std::size_t>(c)] =
-          static_cast<float>(t.mode == Mode::hdr10 ? transfer::pq_eotf(e) : transfer::hlg_inverse_oetf(e));
+          static_cast<float>(t.mode == Mode::hdr10 ? transfer::pq_eotf(e) : s.hlg.scene_of_signal(e));
     }
   }
   if (t.mode == Mode::hdr10 && s.max_code == 1023) {
@@ -438,13 +533,15 @@ Vec3 reference_display_nits(const PreparedPipeline& p, Vec3 input_rgb) {
       // every output channel at or below the peak (Rec.2020 max alone does not bound Rec.709).
       const Vec3 c = detail::working_to_container(t) * w;
       const double m = std::max({w.x, w.y, w.z, c.x, c.y, c.z});
-      nits = m > 0 ? w * (p.curve->map(m) / m * t.paper_white_nits) : Vec3{};
+      const Vec3 y = m > 0 ? w * (p.curve->shape(m) / m) : Vec3{};
+      nits = p.curve->lifts_black() ? Vec3{p.curve->lift(y.x), p.curve->lift(y.y), p.curve->lift(y.z)} : y;
+      nits = nits * t.paper_white_nits;
     } else {
       nits = p.curve->map_rgb(w, p.apply) * t.paper_white_nits;
     }
     if (g && g->placement() == grade::Placement::display) nits = apply_grade(nits);
   }
-  return detail::gamut_map(nits, t, p.settings.gamut);
+  return detail::displayed_light(detail::gamut_map(nits, t, p.settings.gamut), t);
 }
 
 Vec3 reference_signal(const DisplayTarget& t, Vec3 n) {
@@ -452,7 +549,7 @@ Vec3 reference_signal(const DisplayTarget& t, Vec3 n) {
     case Mode::hdr10:
       return {transfer::pq_inverse_eotf(n.x), transfer::pq_inverse_eotf(n.y), transfer::pq_inverse_eotf(n.z)};
     case Mode::hlg:
-      return transfer::hlg_inverse_eotf(n, t.peak_nits);
+      return transfer::hlg_inverse_eotf(n, t.peak_nits, t.black_nits);
     case Mode::scrgb:
       return n * (1.0 / transfer::kScrgbUnitNits);
     case Mode::sdr: {

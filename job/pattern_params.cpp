@@ -12,6 +12,7 @@ namespace {
 constexpr std::string_view kRamp[] = {"params.steps", "params.labels"};
 constexpr std::string_view kWindow[] = {"params.level_nits", "params.area_percent"};
 constexpr std::string_view kClipping[] = {"params.level_nits", "params.labels"};
+constexpr std::string_view kLabelsOnly[] = {"params.labels"};
 // BT.2111-2 defines bars for PQ and HLG only.
 constexpr Mode kBt2111Modes[] = {Mode::hdr10, Mode::hlg};
 constexpr PatternEntry kPatterns[] = {
@@ -21,6 +22,7 @@ constexpr PatternEntry kPatterns[] = {
     {"near-black", kRamp, {}, 1, 10},
     {"clipping", kClipping, {}},
     {"sdr-grey", kRamp, {}, 2, 256},
+    {"sdr-shadows", kLabelsOnly, {}},
 };
 
 std::string short_name(std::string_view path) { return std::string(path.substr(path.find('.') + 1)); }

@@ -17,6 +17,7 @@ using nlohmann::json;
 
 constexpr std::string_view kRanges[] = {"full", "narrow"};
 constexpr std::string_view kSdrCurves[] = {"srgb", "gamma22"};
+constexpr std::string_view kSdrEotfs[] = {"srgb", "gamma22", "bt1886"};
 constexpr std::string_view kApply[] = {"per-channel", "max-rgb", "luminance", "rgb"};
 constexpr std::string_view kGamut[] = {"ictcp", "clip"};
 constexpr std::string_view kExposureModes[] = {"auto", "manual", "camera", "log-average", "histogram", "light"};
@@ -68,6 +69,11 @@ std::vector<Setting> make_table() {
       {.path = "display.sdr_curve", .type = T::choice, .sources = kAllSources,
        .doc = "SDR transfer: srgb (piecewise) or gamma22", .choices = kSdrCurves, .default_json = "\"srgb\"",
        .flag = "--sdr-curve", .metavar = "CURVE", .query = "sdr_curve"},
+      {.path = "display.sdr_content_eotf", .type = T::choice, .sources = kAllSources,
+       .doc = "EOTF SDR content (the UI overlay, SDR input, sdr-grey/sdr-shadows) was mastered with; decides its "
+              "shadows in HDR frames",
+       .choices = kSdrEotfs, .default_json = "\"srgb\"", .flag = "--sdr-eotf", .metavar = "EOTF",
+       .query = "sdr_content_eotf"},
       {.path = "display.connector", .type = T::text, .sources = kAllSources,
        .doc = "Take mode, levels and primaries from an attached display: 'auto' (the first HDR-capable one) "
               "or a connector name",

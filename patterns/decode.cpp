@@ -47,7 +47,8 @@ color::Vec3 decode_codes(const DisplayTarget& t, const int code[3]) {
       return {transfer::pq_eotf(std::max(e.x, 0.0)), transfer::pq_eotf(std::max(e.y, 0.0)),
               transfer::pq_eotf(std::max(e.z, 0.0))};
     case Mode::hlg:
-      return transfer::hlg_eotf({std::max(e.x, 0.0), std::max(e.y, 0.0), std::max(e.z, 0.0)}, t.peak_nits);
+      return transfer::hlg_eotf({std::max(e.x, 0.0), std::max(e.y, 0.0), std::max(e.z, 0.0)}, t.peak_nits,
+                                t.black_nits);
     case Mode::sdr: {
       auto f = [&](double v) {
         v = std::clamp(v, 0.0, 1.0);

@@ -23,7 +23,7 @@ PixelSignal read_pixel(const EncodedFrame& frame, int x, int y);
 double code_to_signal(const DisplayTarget& t, int code);
 
 // Display light of one pixel in the container primaries, cd/m2:
-//  hdr10: ST 2084 EOTF per channel; hlg: BT.2100 HLG EOTF at the target peak;
+//  hdr10: ST 2084 EOTF per channel; hlg: BT.2100 HLG EOTF at the target peak and black;
 //  scrgb: value x 80 (IEC 61966-2-2); sdr: sRGB / gamma 2.2 EOTF x peak; sdr-bt1886: BT.1886.
 color::Vec3 decode_pixel(const EncodedFrame& frame, int x, int y);
 color::Vec3 decode_codes(const DisplayTarget& t, const int code[3]);

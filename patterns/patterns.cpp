@@ -26,6 +26,9 @@ constexpr PatternInfo kPatterns[] = {
      "HGIG HDR calibration guidelines (max-luminance clipping pattern)"},
     {"sdr-grey", "SDR signal steps 0..100 % decoded with the SDR EOTF and placed at the SDR white",
      "BT.2408 §5 (SDR white in an HDR frame)"},
+    {"sdr-shadows", "SDR shadow steps (0..20 % signal) decoded three ways, one row each: sRGB piecewise, gamma 2.2, "
+                    "BT.1886 (2.4), placed at the SDR white, labelled with the 8-bit code; > marks the SDR content EOTF",
+     "IEC 61966-2-1, ITU-R BT.1886 (SDR content in an HDR frame)"},
 };
 
 std::string nits_label(double nits) {
@@ -149,25 +152,74 @@ Image clipping(const DisplayTarget& t, const PatternOptions& o) {
   return img;
 }
 
+// Light of SDR signal v relative to its white: in an HDR frame the SDR content's EOTF
+// (DisplayTarget::sdr_content_eotf); in SDR modes the display's own.
+double sdr_relative(const DisplayTarget& t, double v) {
+  if (t.is_hdr()) return sdr_eotf(t.sdr_content_eotf, v);
+  if (t.mode == Mode::sdr_bt1886)
+    return transfer::Bt1886::from_levels(t.peak_nits, t.black_nits).eotf(v) / t.peak_nits;
+  return t.sdr_curve == SdrCurve::srgb ? transfer::srgb_eotf(v) : transfer::gamma22_eotf(v);
+}
+
+// SDR white in an HDR frame is the target's sdr_white_nits (BT.2408: 203 cd/m2); in SDR
+// modes the display's own white.
+double sdr_white(const DisplayTarget& t) { return t.is_hdr() ? t.sdr_white_nits : t.peak_nits; }
+
 Image sdr_grey(const DisplayTarget& t, const PatternOptions& o) {
   Image img(o.width, o.height);
   Canvas c{img};
   const int steps = o.steps > 1 ? o.steps : 11;
-  // SDR white in an HDR frame is the target's sdr_white_nits (BT.2408: 203 cd/m2); in SDR
-  // modes the display's own white.
-  const double white = t.is_hdr() ? t.sdr_white_nits : t.peak_nits;
   std::vector<double> levels;
   std::vector<std::string> labels;
   for (int i = 0; i < steps; ++i) {
     const double v = double(i) / (steps - 1);
-    levels.push_back(white * (t.sdr_curve == SdrCurve::srgb ? transfer::srgb_eotf(v) : transfer::gamma22_eotf(v)));
+    levels.push_back(sdr_white(t) * sdr_relative(t, v));
     labels.push_back(fmt::format("{:.0f}%", v * 100));
   }
   patch_row(c, levels, labels, t, o.labels);
   return img;
 }
 
+Image sdr_shadows(const DisplayTarget& t, const PatternOptions& o) {
+  Image img(o.width, o.height);
+  Canvas c{img};
+  const auto& signals = sdr_shadow_signals();
+  const int n = static_cast<int>(signals.size()), w = o.width, h = o.height;
+  const int strip = std::max(1, h / 8), label_w = w / 8;
+  const int row_h = (h - strip) / 3;
+  for (int r = 0; r < 3; ++r) {
+    const SdrEotf e = kSdrShadowRows[r];
+    const int y0 = r * row_h, y1 = y0 + row_h - std::max(1, row_h / 10);  // a black gap between rows
+    for (int i = 0; i < n; ++i) {
+      const int x0 = label_w + i * (w - label_w) / n, x1 = label_w + (i + 1) * (w - label_w) / n;
+      c.fill(x0, y0, x1, y1, sdr_white(t) * sdr_eotf(e, signals[static_cast<std::size_t>(i)]));
+    }
+    if (o.labels) {
+      const std::string name = (e == t.sdr_content_eotf ? ">" : "") + std::string(to_string(e));
+      c.label(name, label_w / 2, y0 + row_h / 4, label_w - 2, row_h / 2, label_nits(t));
+    }
+  }
+  if (o.labels)
+    for (int i = 0; i < n; ++i) {
+      const int x0 = label_w + i * (w - label_w) / n, x1 = label_w + (i + 1) * (w - label_w) / n;
+      c.label(fmt::format("{}", std::lround(signals[static_cast<std::size_t>(i)] * 255)), (x0 + x1) / 2,
+              h - strip + strip / 4, x1 - x0 - 2, strip / 2, label_nits(t));
+    }
+  return img;
+}
+
 }  // namespace
+
+const std::vector<double>& sdr_shadow_signals() {
+  // 8-bit codes 0, 3, 5, 8, 10, 13, 15, 20, 26, 38, 51 (as fractions of 255): where the
+  // piecewise sRGB toe and the power laws differ most, relative to their level.
+  static const std::vector<double> v = [] {
+    std::vector<double> s;
+    for (int code : {0, 3, 5, 8, 10, 13, 15, 20, 26, 38, 51}) s.push_back(code / 255.0);
+    return s;
+  }();
+  return v;
+}
 
 std::span<const PatternInfo> patterns() { return kPatterns; }
 
@@ -188,6 +240,7 @@ Result<Image> pattern_nits(std::string_view name, const DisplayTarget& t, const 
   if (name == "near-black") return near_black(t, o);
   if (name == "clipping") return clipping(t, o);
   if (name == "sdr-grey") return sdr_grey(t, o);
+  if (name == "sdr-shadows") return sdr_shadows(t, o);
   if (name == "bt2111")
     return make_error("pattern.codes", "bt2111 is defined as code values, not display light", "pattern");
   return make_error("pattern.unknown", fmt::format("unknown pattern '{}' (see hdrd pattern --list)", name), "pattern");
@@ -266,6 +319,13 @@ Result<EncodedFrame> make_pattern(std::string_view name, const DisplayTarget& ta
     frame = encode_display_nits(*nits, target, keep_display_nits);
     const double level = o.level_nits > 0 ? o.level_nits : target.peak_nits;
     if (name == "window") desc["level_nits"] = level, desc["area_percent"] = o.area_percent;
+    if (name == "sdr-shadows") {
+      desc["rows"] = nlohmann::json::array();
+      for (SdrEotf e : kSdrShadowRows) desc["rows"].push_back(to_string(e));
+      desc["signals"] = sdr_shadow_signals();
+      desc["sdr_white_nits"] = sdr_white(target);
+      desc["sdr_content_eotf"] = to_string(target.sdr_content_eotf);
+    }
     if (name == "clipping") {
       desc["level_nits"] = level;
       desc["square_nits"] = nlohmann::json::array();

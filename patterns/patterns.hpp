@@ -35,6 +35,13 @@ struct PatternOptions {
   bool labels = true;         // draw the built-in bitmap font labels
 };
 
+// sdr-shadows: rows top to bottom decode the same SDR signals (sdr_shadow_signals(), 0 to
+// 20 %) with these EOTFs, each placed at the SDR white (sdr_white_nits in HDR modes, the
+// peak in SDR modes); each row's patches span the columns right of a label strip of
+// width / 8, the rows split the height above a label strip of height / 8 in thirds.
+inline constexpr SdrEotf kSdrShadowRows[3] = {SdrEotf::srgb, SdrEotf::gamma22, SdrEotf::bt1886};
+const std::vector<double>& sdr_shadow_signals();
+
 // Display light of a display-referred pattern (all but bt2111): RGBA float, linear
 // Rec.2020, cd/m2, rows top-down.
 Result<Image> pattern_nits(std::string_view name, const DisplayTarget& target, const PatternOptions& options);

@@ -14,6 +14,7 @@
 
 #include "encode/frame.hpp"
 #include "encode/io/io.hpp"
+#include "encode/tone/tonemap.hpp"
 
 namespace hdrd::patterns {
 
@@ -63,6 +64,26 @@ Check check_exr(const EncodedFrame& frame, const io::ExrImage& exr);
 std::vector<Check> check_curves_monotonic(const DisplayTarget& target);
 // A pattern window: the centre decodes to `level_nits` within one code.
 Check check_window(const EncodedFrame& frame, double level_nits);
+// The frame's display light (the EXR dump, frame.display_nits) equals what a display
+// decodes from its codes (patterns/decode.hpp: the mode's EOTF at the target's peak and
+// black), every channel within 1 % (near 0: 1 % of the pixel's brightest channel) or half
+// the light between its neighbouring codes, whichever is more. For
+// saturated colours this is the mode's displayable volume (HLG: the OOTF's reach).
+Check check_display_volume(const EncodedFrame& frame, const std::string& what);
+// Grey pixels of relative input xs[i] (pixel i, row-major) encoded with `curve`: each within
+// one 16-bit PNG step (full range; one code otherwise) of the signal of curve(x) x paper
+// white through the mode's inverse EOTF. `kinks` only label the detail.
+Check check_tone_kinks(const EncodedFrame& frame, const tonemap::Curve& curve, std::span<const double> xs,
+                       const std::string& curve_name, std::span<const double> kinks);
+// A black frame's MaxCLL / MaxFALL in its sidecar, PNG cLLI (png may be null: scRGB) and
+// HDR_OUTPUT_METADATA blob (empty: none) are all the mastering peak (REFERENCE.md §6).
+Check check_black_frame_metadata(const EncodedFrame& frame, const nlohmann::json& sidecar, const io::PngInfo* png,
+                                 std::span<const std::uint8_t> blob);
+// A UI overlay of 8-bit grey codes `codes8` in equal columns over black: each column decodes
+// to ui_white_nits x the target's SDR content EOTF of its code, within one step.
+Check check_sdr_content(const EncodedFrame& frame, std::span<const int> codes8, double ui_white_nits);
+// The sdr-shadows pattern (patterns.hpp): each row decodes to SDR white x its EOTF.
+Check check_sdr_shadows(const EncodedFrame& frame);
 
 // ---- The suite ---------------------------------------------------------------------------
 struct SuiteOptions {

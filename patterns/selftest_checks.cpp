@@ -10,6 +10,7 @@
 #include "encode/tone/tonemap.hpp"
 #include "encode/colour/transfer.hpp"
 #include "patterns/decode.hpp"
+#include "patterns/patterns.hpp"
 #include "patterns/selftest.hpp"
 
 namespace hdrd::patterns {
@@ -35,7 +36,7 @@ std::pair<int, std::string> paper_white_code(const DisplayTarget& t) {
     case Mode::hlg:
       if (pw == 203 && t.peak_nits == 1000)
         return {quantize(t, 0.75), "BT.2408-7 §2: 203 cd/m2 on a 1000 cd/m2 HLG display -> HLG 75 %"};
-      return {quantize(t, transfer::hlg_inverse_eotf({pw, pw, pw}, t.peak_nits).x),
+      return {quantize(t, transfer::hlg_inverse_eotf({pw, pw, pw}, t.peak_nits, t.black_nits).x),
               "BT.2100 HLG inverse EOTF of paper white at the display peak"};
     case Mode::sdr:
     case Mode::sdr_bt1886:
@@ -283,7 +284,8 @@ Check check_window(const EncodedFrame& f, double level_nits) {
   const double target_nits = std::min(level_nits, t.peak_nits);
   int want = 0;
   if (t.mode == Mode::hdr10) want = quantize(t, transfer::pq_inverse_eotf(target_nits));
-  else if (t.mode == Mode::hlg) want = quantize(t, transfer::hlg_inverse_eotf({target_nits, target_nits, target_nits}, t.peak_nits).x);
+  else if (t.mode == Mode::hlg)
+    want = quantize(t, transfer::hlg_inverse_eotf({target_nits, target_nits, target_nits}, t.peak_nits, t.black_nits).x);
   else if (t.mode == Mode::sdr) want = quantize(t, transfer::srgb_inverse_eotf(target_nits / t.peak_nits));
   else if (t.mode == Mode::sdr_bt1886) want = quantize(t, transfer::Bt1886::from_levels(t.peak_nits, t.black_nits).inverse_eotf(target_nits));
   else {
@@ -295,6 +297,200 @@ Check check_window(const EncodedFrame& f, double level_nits) {
   for (int c : p.code) worst = std::max(worst, std::abs(c - want));
   return make("window", "window level within 1 code of the requested luminance (transfer of the mode)", worst <= 1,
               fmt::format("codes ({}, {}, {}) vs {} for {} cd/m2", p.code[0], p.code[1], p.code[2], want, target_nits));
+}
+
+}  // namespace hdrd::patterns
+
+namespace hdrd::patterns {
+namespace {
+
+// The signal E' of grey display light `nits` in the frame's mode, from the standards
+// (ST 2084, BT.2100 HLG with the target's black, IEC 61966-2-1 / 2.2, BT.1886).
+double grey_signal(const DisplayTarget& t, double nits) {
+  switch (t.mode) {
+    case Mode::hdr10: return transfer::pq_inverse_eotf(nits);
+    case Mode::hlg: return transfer::hlg_inverse_eotf({nits, nits, nits}, t.peak_nits, t.black_nits).x;
+    case Mode::sdr: {
+      const double l = std::clamp(nits / t.peak_nits, 0.0, 1.0);
+      return t.sdr_curve == SdrCurve::srgb ? transfer::srgb_inverse_eotf(l) : transfer::gamma22_inverse_eotf(l);
+    }
+    case Mode::sdr_bt1886: return transfer::Bt1886::from_levels(t.peak_nits, t.black_nits).inverse_eotf(nits);
+    case Mode::scrgb: return nits / transfer::kScrgbUnitNits;
+  }
+  return 0;
+}
+
+// How far pixel (x, y)'s channels are from grey light `nits`: in codes, and where the frame
+// has 16-bit PNG samples (full range) in those steps too; scRGB in half-float relative error
+// x 1000 (both fields). The larger of the two is what the checks hold to one step.
+struct StepsOff {
+  double codes = 0, samples16 = 0;
+  double worst() const { return std::max(codes, samples16); }
+};
+StepsOff grey_steps_off(const EncodedFrame& f, int x, int y, double nits) {
+  const DisplayTarget& t = f.target;
+  const double e = grey_signal(t, nits);
+  StepsOff off;
+  if (t.mode == Mode::scrgb) {
+    const PixelSignal p = read_pixel(f, x, y);
+    for (double v : p.scrgb) off.codes = std::max(off.codes, std::abs(v - e) / std::max(std::abs(e), 1e-3) * 1000);
+    off.samples16 = off.codes;
+    return off;
+  }
+  const int want = quantize(t, e);
+  for (int c : read_pixel(f, x, y).code) off.codes = std::max(off.codes, double(std::abs(c - want)));
+  if (!f.signal16.empty() && t.range == Range::full) {
+    const double want16 = std::clamp(e, 0.0, 1.0) * 65535;
+    for (int c = 0; c < 3; ++c)
+      off.samples16 = std::max(off.samples16, std::abs(f.signal16[(static_cast<std::size_t>(y) * f.width + x) * 3 + c] - want16));
+    off.samples16 = std::max(0.0, off.samples16 - 0.5);  // the sample is rounded
+  }
+  return off;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : "; ") + x;
+  return s;
+}
+
+}  // namespace
+
+Check check_display_volume(const EncodedFrame& f, const std::string& what) {
+  const std::string name = "display-volume/" + what;
+  const std::string source = "the dump is the light a display decodes from the codes: BT.2100 EOTF (PQ; HLG at the "
+                             "target's peak and black), BT.1886, IEC 61966-2-1";
+  if (!f.display_nits) return make(name, source, false, "the frame has no display light (dump) to compare");
+  double worst = 0;
+  int wx = 0, wy = 0;
+  const bool codes = f.target.mode != Mode::scrgb;
+  const int top_code = (1 << f.target.bits) - 1;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const color::Vec3 n = decode_pixel(f, x, y);
+      const float* p = f.display_nits->px(x, y);
+      const double top = std::max({n.x, n.y, n.z, 1e-3});
+      const PixelSignal sig = read_pixel(f, x, y);
+      for (int c = 0; c < 3; ++c) {
+        // 1 % of the channel (near 0: of 1 % of the pixel's brightest channel), or half the
+        // light between the codes either side (the dump is before quantisation: 8-bit SDR
+        // shadows step by several per cent).
+        double tolerance = 0.01 * std::max(std::abs(n[c]), 0.01 * top);
+        if (codes) {
+          int up[3] = {sig.code[0], sig.code[1], sig.code[2]}, down[3] = {sig.code[0], sig.code[1], sig.code[2]};
+          up[c] = std::min(up[c] + 1, top_code), down[c] = std::max(down[c] - 1, 0);
+          tolerance = std::max(tolerance, 0.5 * (decode_codes(f.target, up)[c] - decode_codes(f.target, down)[c]));
+        }
+        const double off = std::abs(p[c] - n[c]) / tolerance;
+        if (off > worst) worst = off, wx = x, wy = y;
+      }
+    }
+  const color::Vec3 n = decode_pixel(f, wx, wy);
+  const float* p = f.display_nits->px(wx, wy);
+  return make(name, source, worst <= 1,
+              fmt::format("worst pixel ({}, {}): dump ({:.2f}, {:.2f}, {:.2f}) vs decoded ({:.2f}, {:.2f}, {:.2f}) cd/m2, "
+                          "{:.2f}x the tolerance (1 %, or half a code's light)",
+                          wx, wy, p[0], p[1], p[2], n.x, n.y, n.z, worst));
+}
+
+Check check_tone_kinks(const EncodedFrame& f, const tonemap::Curve& curve, std::span<const double> xs,
+                       const std::string& curve_name, std::span<const double> kinks) {
+  const std::string name = "tone-kinks/" + curve_name;
+  const std::string source = "the fast path's tone tables against the curve at and around its kinks (found "
+                             "numerically), through the mode's inverse EOTF";
+  StepsOff worst;
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < xs.size() && static_cast<int>(i) < f.width * f.height; ++i) {
+    const double nits = curve.map(xs[i]) * f.target.paper_white_nits;
+    const StepsOff off = grey_steps_off(f, static_cast<int>(i % f.width), static_cast<int>(i / f.width), nits);
+    if (off.worst() > worst.worst()) worst = off, at = i;
+  }
+  std::string ks;
+  for (double k : kinks) ks += fmt::format("{}{:.6g}", ks.empty() ? "" : ", ", k);
+  return make(name, source, worst.worst() <= 1.0,
+              fmt::format("kinks at x = [{}]; worst at x = {:.9g}: {:.2f} codes, {:.2f} 16-bit steps off", ks,
+                          xs.empty() ? 0.0 : xs[at], worst.codes, worst.samples16));
+}
+
+Check check_black_frame_metadata(const EncodedFrame& f, const nlohmann::json& sidecar, const io::PngInfo* png,
+                                 std::span<const std::uint8_t> blob) {
+  const std::string name = "black-frame-metadata";
+  const std::string source = "REFERENCE.md §6: MaxCLL/MaxFALL that would be 0 (CTA-861.3: unknown) carry the "
+                             "mastering peak, the same in the sidecar, PNG cLLI and HDR_OUTPUT_METADATA";
+  const int want = static_cast<int>(std::lround(f.mastering.max_nits));
+  std::vector<std::string> seen, bad;
+  auto expect = [&](const std::string& where, double cll, double fall) {
+    seen.push_back(fmt::format("{} {:g}/{:g}", where, cll, fall));
+    if (cll != want || fall != want) bad.push_back(fmt::format("{} says {:g}/{:g}, want {}/{}", where, cll, fall, want, want));
+  };
+  const auto& level = sidecar.contains("content_light_level") ? sidecar["content_light_level"] : nlohmann::json();
+  if (!level.is_object() || !level.contains("max_cll_nits")) bad.push_back("the sidecar has no content_light_level");
+  else expect("sidecar", level["max_cll_nits"].get<double>(), level["max_fall_nits"].get<double>());
+  if (png) {
+    if (!png->clli || png->clli->size() != 8) bad.push_back("the PNG has no 8-bit cLLI chunk");
+    else {
+      const auto& v = *png->clli;
+      auto be32 = [&](std::size_t i) {
+        return (std::uint32_t(v[i]) << 24) | (std::uint32_t(v[i + 1]) << 16) | (std::uint32_t(v[i + 2]) << 8) | v[i + 3];
+      };
+      expect("PNG cLLI", be32(0) / 10000.0, be32(4) / 10000.0);
+    }
+  }
+  if (!blob.empty()) {
+    if (blob.size() < 30) bad.push_back("HDR_OUTPUT_METADATA is shorter than 30 bytes");
+    else expect("HDR_OUTPUT_METADATA", blob[26] | (blob[27] << 8), blob[28] | (blob[29] << 8));
+  }
+  return make(name, source, bad.empty(), bad.empty() ? joined(seen) : joined(bad));
+}
+
+Check check_sdr_content(const EncodedFrame& f, std::span<const int> codes8, double ui_white_nits) {
+  const DisplayTarget& t = f.target;
+  const SdrEotf e = t.sdr_content_eotf;
+  const std::string name = "sdr-content/" + std::string(to_string(e));
+  const std::string source = "SDR content (the UI) decoded with its EOTF (IEC 61966-2-1 sRGB, 2.2, BT.1886 2.4) "
+                             "and placed at UI white";
+  auto relative = [&](double v) {
+    switch (e) {  // written from the standards here, not through the encoder's sdr_eotf
+      case SdrEotf::srgb: return transfer::srgb_eotf(v);
+      case SdrEotf::gamma22: return std::pow(v, 2.2);
+      case SdrEotf::bt1886: return std::pow(v, 2.4);
+    }
+    return v;
+  };
+  const int n = static_cast<int>(codes8.size());
+  StepsOff worst;
+  std::string detail;
+  for (int i = 0; i < n; ++i) {
+    const int x = (2 * i + 1) * f.width / (2 * n);
+    const double nits = ui_white_nits * relative(codes8[static_cast<std::size_t>(i)] / 255.0);
+    const StepsOff off = grey_steps_off(f, x, f.height / 2, nits);
+    if (off.worst() > worst.worst()) worst = off;
+    if (codes8[static_cast<std::size_t>(i)] == 10)
+      detail = fmt::format("8-bit code 10 -> {:.4f} cd/m2 (decoded {:.4f}); ", nits, decode_pixel(f, x, f.height / 2).y);
+  }
+  return make(name, source, worst.worst() <= 1.0,
+              detail + fmt::format("worst {:.2f} codes, {:.2f} 16-bit steps off", worst.codes, worst.samples16));
+}
+
+Check check_sdr_shadows(const EncodedFrame& f) {
+  const DisplayTarget& t = f.target;
+  const std::string source = "the sdr-shadows pattern: row r decodes to SDR white x EOTF_r(signal) "
+                             "(IEC 61966-2-1, 2.2, BT.1886 2.4)";
+  const auto& signals = sdr_shadow_signals();
+  const double white = t.is_hdr() ? t.sdr_white_nits : t.peak_nits;
+  const int n = static_cast<int>(signals.size()), label_w = f.width / 8;
+  const int row_h = (f.height - std::max(1, f.height / 8)) / 3;
+  StepsOff worst;
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < n; ++i) {
+      const double v = signals[static_cast<std::size_t>(i)];
+      const double rel = r == 0 ? transfer::srgb_eotf(v) : std::pow(v, r == 1 ? 2.2 : 2.4);
+      const int x = label_w + (2 * i + 1) * (f.width - label_w) / (2 * n), y = r * row_h + row_h / 3;
+      const StepsOff off = grey_steps_off(f, x, y, std::min(white * rel, t.peak_nits));
+      if (off.worst() > worst.worst()) worst = off;
+    }
+  return make("sdr-shadows/rows", source, worst.worst() <= 1.0,
+              fmt::format("worst {:.2f} codes, {:.2f} 16-bit steps off", worst.codes, worst.samples16));
 }
 
 }  // namespace hdrd::patterns

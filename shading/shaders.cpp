@@ -185,7 +185,10 @@ float shadow_visibility(vec3 p, vec3 ng, vec3 l) {
   return sum / 9.0;
 }
 
-// glTF KHR_lights_punctual's recommended window: (1 - (d/r)^4)^2, 1 at r = 0.
+// The range window: the squared form (1 - (d/r)^4)^2 of Karis 2013 (UE4; also Filament's),
+// 1 at r = 0 (no range). KHR_lights_punctual's README recommends the unsquared
+// clamp(1 - (d/r)^4, 0, 1) and allows "some non-quadratic falloff near the edge of the
+// range": hdrd implements the squared one, which reaches zero with zero slope.
 float range_window(float d2, float range) {
   if (range <= 0.0) return 1.0;
   float q = d2 / (range * range);

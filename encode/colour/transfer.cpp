@@ -56,25 +56,60 @@ double hlg_inverse_oetf(double s) {
   return s <= 0.5 ? s * s / 3.0 : (std::exp((s - kHlgC) / kHlgA) + kHlgB) / 12.0;
 }
 
-double hlg_system_gamma(double peak_nits) { return 1.2 + 0.42 * std::log10(peak_nits / 1000.0); }
-
-color::Vec3 hlg_eotf(color::Vec3 signal, double peak_nits) {
-  const color::Vec3 e{hlg_inverse_oetf(signal.x), hlg_inverse_oetf(signal.y), hlg_inverse_oetf(signal.z)};
-  const double ys = color::dot(color::kRec2020Luma, e);
-  const double gamma = hlg_system_gamma(peak_nits);
-  const double scale = ys > 0 ? peak_nits * std::pow(ys, gamma - 1.0) : 0.0;
-  return e * scale;
+double hlg_system_gamma(double peak_nits) {
+  if (peak_nits >= kHlgGammaRangeLowNits && peak_nits <= kHlgGammaRangeHighNits)
+    return 1.2 + 0.42 * std::log10(peak_nits / 1000.0);
+  return 1.2 * std::pow(kHlgExtendedGammaKappa, std::log2(peak_nits / 1000.0));
 }
 
-color::Vec3 hlg_inverse_eotf(color::Vec3 nits, double peak_nits) {
+HlgDisplay HlgDisplay::from_levels(double peak_nits, double black_nits) {
+  HlgDisplay d;
+  d.peak_nits = peak_nits;
+  d.black_nits = std::max(black_nits, 0.0);
+  d.gamma = hlg_system_gamma(peak_nits);
+  d.beta = std::sqrt(3.0 * std::pow(d.black_nits / peak_nits, 1.0 / d.gamma));
+  return d;
+}
+
+double HlgDisplay::scene_of_signal(double signal) const {
+  return hlg_inverse_oetf(std::max(0.0, (1.0 - beta) * signal + beta));
+}
+
+double HlgDisplay::signal_of_scene(double scene) const {
+  const double lifted = hlg_oetf(std::clamp(scene, 0.0, 1.0));
+  return beta > 0 ? std::clamp((lifted - beta) / (1.0 - beta), 0.0, 1.0) : lifted;
+}
+
+color::Vec3 HlgDisplay::ootf(color::Vec3 e) const {
+  const double ys = color::dot(color::kRec2020Luma, e);
+  return ys > 0 ? e * (peak_nits * std::pow(ys, gamma - 1.0)) : color::Vec3{};
+}
+
+double HlgDisplay::ootf_inverse_scale(double yd) const {
+  // Fd = Lw Ys^(g-1) E and Yd = Lw Ys^g, so E = Fd / Lw * (Yd / Lw)^((1 - g) / g).
+  return yd > 0 ? std::pow(yd / peak_nits, (1.0 - gamma) / gamma) / peak_nits : 0.0;
+}
+
+color::Vec3 HlgDisplay::inverse_ootf(color::Vec3 nits) const {
   const color::Vec3 fd{std::max(nits.x, 0.0), std::max(nits.y, 0.0), std::max(nits.z, 0.0)};
-  const double yd = color::dot(color::kRec2020Luma, fd);
-  if (!(yd > 0)) return {0, 0, 0};
-  const double gamma = hlg_system_gamma(peak_nits);
-  // OOTF: Fd = Lw Ys^(g-1) E and Yd = Lw Ys^g, so E = Fd / Lw * (Yd/Lw)^((1-g)/g).
-  const double scale = std::pow(yd / peak_nits, (1.0 - gamma) / gamma) / peak_nits;
-  const color::Vec3 e = fd * scale;
-  return {hlg_oetf(std::min(e.x, 1.0)), hlg_oetf(std::min(e.y, 1.0)), hlg_oetf(std::min(e.z, 1.0))};
+  return fd * ootf_inverse_scale(color::dot(color::kRec2020Luma, fd));
+}
+
+color::Vec3 HlgDisplay::eotf(color::Vec3 s) const {
+  return ootf({scene_of_signal(s.x), scene_of_signal(s.y), scene_of_signal(s.z)});
+}
+
+color::Vec3 HlgDisplay::inverse_eotf(color::Vec3 nits) const {
+  const color::Vec3 e = inverse_ootf(nits);
+  return {signal_of_scene(e.x), signal_of_scene(e.y), signal_of_scene(e.z)};
+}
+
+color::Vec3 hlg_eotf(color::Vec3 signal, double peak_nits, double black_nits) {
+  return HlgDisplay::from_levels(peak_nits, black_nits).eotf(signal);
+}
+
+color::Vec3 hlg_inverse_eotf(color::Vec3 nits, double peak_nits, double black_nits) {
+  return HlgDisplay::from_levels(peak_nits, black_nits).inverse_eotf(nits);
 }
 
 // ---- sRGB / gamma 2.2 -----------------------------------------------------------------

@@ -34,12 +34,49 @@ inline constexpr double kHlgC = 0.55991073;  // as published in BT.2100 (0.5 - a
 
 double hlg_oetf(double scene_linear);          // E in [0,1] -> E'
 double hlg_inverse_oetf(double signal);        // E' -> E in [0,1]
-double hlg_system_gamma(double peak_nits);     // 1.2 + 0.42 log10(Lw / 1000)
-// Display EOTF for an RGB signal (BT.2100 table 5, black level Lb = 0 form):
-// F_D = Lw * Ys^(gamma-1) * E, E = inverse OETF(E'), Ys = Rec.2020 luma of E.
-color::Vec3 hlg_eotf(color::Vec3 signal, double peak_nits);
-// Inverse: display light (Rec.2020 nits) -> signal. Inverse OOTF, then the OETF.
-color::Vec3 hlg_inverse_eotf(color::Vec3 nits, double peak_nits);
+
+// System gamma of an HLG display of nominal peak Lw (BT.2100-2 Table 5 note 5f):
+// gamma = 1.2 + 0.42 log10(Lw / 1000) over the usual production range 400 <= Lw <= 2000
+// cd/m2, and outside it BT.2100's extended range formula gamma = 1.2 kappa^log2(Lw / 1000),
+// kappa = 1.111 (BT.2390 §6.2 gives the same model, there with a surround term that hdrd
+// keeps at its 5 cd/m2 reference). 1000 -> 1.2, 2000 -> 1.3264, 4000 -> 1.4812, 10000 -> 1.7023.
+inline constexpr double kHlgGammaRangeLowNits = 400.0, kHlgGammaRangeHighNits = 2000.0;
+inline constexpr double kHlgExtendedGammaKappa = 1.111;
+double hlg_system_gamma(double peak_nits);
+
+// An HLG display (BT.2100 Table 5): nominal peak Lw, black level Lb, the system gamma of
+// Lw, and the black lift beta = sqrt(3 (Lb / Lw)^(1 / gamma)) of its EOTF
+//   F_D = OOTF[OETF^-1[max(0, (1 - beta) E' + beta)]],  OOTF: F_D = Lw Y_S^(gamma - 1) E.
+// beta is 0 for Lb = 0, where this is the plain BT.2100 EOTF.
+struct HlgDisplay {
+  double peak_nits = 1000, black_nits = 0;
+  double gamma = 1.2, beta = 0;
+  static HlgDisplay from_levels(double peak_nits, double black_nits);
+
+  // Scene light of one channel for a code's signal E' (lift and inverse OETF), and the
+  // signal of one channel's scene light E (E clipped to [0, 1] first; light below the
+  // lifted black, E < OETF^-1(beta), has no signal and gets E' = 0).
+  double scene_of_signal(double signal) const;
+  double signal_of_scene(double scene) const;
+  // The scene light E' = 0 decodes to, OETF^-1(beta) = (Lb / Lw)^(1 / gamma): the display's
+  // black is this in every channel.
+  double scene_black() const { return hlg_inverse_oetf(beta); }
+  // OOTF and its inverse (BT.2100 Table 5). The inverse multiplies F_D by
+  // (Y_D / Lw)^((1 - gamma) / gamma) / Lw, a factor of the luminance Y_D alone
+  // (ootf_inverse_scale): that is what makes the displayable volume of a hue a simple
+  // line, which the encoder's HLG volume mapping uses.
+  color::Vec3 ootf(color::Vec3 scene) const;
+  double ootf_inverse_scale(double luminance_nits) const;
+  color::Vec3 inverse_ootf(color::Vec3 nits) const;  // unclamped: E may leave [0, 1]
+  color::Vec3 eotf(color::Vec3 signal) const;
+  color::Vec3 inverse_eotf(color::Vec3 nits) const;  // E clipped to [0, 1] per channel
+};
+
+// Display EOTF for an RGB signal at the display's peak and black (HlgDisplay::eotf).
+color::Vec3 hlg_eotf(color::Vec3 signal, double peak_nits, double black_nits = 0);
+// Inverse: display light (Rec.2020 nits) -> signal. Inverse OOTF, then the OETF and the
+// inverse of the black lift.
+color::Vec3 hlg_inverse_eotf(color::Vec3 nits, double peak_nits, double black_nits = 0);
 
 // ---- sRGB, IEC 61966-2-1 -------------------------------------------------------------
 double srgb_inverse_eotf(double linear);       // linear [0,1] -> V (piecewise)

@@ -211,12 +211,6 @@ int bits_of(std::uint32_t fourcc) {
   return 10;
 }
 
-// CTA-861.3 carries whole cd/m2: round up so the metadata never understates the content.
-std::int64_t ceil_nits(double nits) {
-  if (!(nits > 0)) return 0;
-  return static_cast<std::int64_t>(std::ceil(nits - 1e-9));
-}
-
 }  // namespace
 
 nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::string, std::string>& files) {
@@ -245,12 +239,16 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
   j["paper_white_nits"] = t.paper_white_nits;
   j["ui_white_nits"] = t.ui_white_nits;
   j["sdr_white_nits"] = t.sdr_white_nits;
+  j["sdr_content_eotf"] = to_string(t.sdr_content_eotf);
   j["target_source"] = t.source;
   j["mastering_display"] = {{"primaries", primaries_json(frame.mastering.primaries)},
                             {"max_nits", frame.mastering.max_nits},
                             {"min_nits", frame.mastering.min_nits}};
-  j["content_light_level"] = {{"max_cll_nits", ceil_nits(frame.content_light.max_cll_nits)},
-                              {"max_fall_nits", ceil_nits(frame.content_light.max_fall_nits)},
+  // HDR signals carry CTA-861.3 levels (the rule of encode/frame.hpp); SDR frames have none: 0.
+  const CarriedLightLevel carried =
+      t.is_hdr() ? carried_light_level(frame.content_light, frame.mastering) : CarriedLightLevel{};
+  j["content_light_level"] = {{"max_cll_nits", carried.max_cll_nits},
+                              {"max_fall_nits", carried.max_fall_nits},
                               {"max_cll_nits_measured", frame.content_light.max_cll_nits},
                               {"max_fall_nits_measured", frame.content_light.max_fall_nits}};
   j["files"] = files;

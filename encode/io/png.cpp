@@ -71,13 +71,14 @@ std::vector<std::uint8_t> mdcv_for(const MasteringDisplay& m) {
   return v;
 }
 
-// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2, rounded up, 0 replaced by the mastering
-// peak, as in the KMS metadata blob (display/hdr_metadata.cpp).
+// cLLI: MaxCLL, MaxFALL as u32 in 0.0001 cd/m2: the values every container carries
+// (carried_light_level, encode/frame.hpp), so the PNG states what the sidecar and the KMS
+// metadata state (a black frame: the mastering peak, not 0).
 std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDisplay& m) {
   std::vector<std::uint8_t> v;
-  const CarriedLight c = carried_light(l, m, 0.0001, 4294967295.0);
-  put_u32(v, c.max_cll);
-  put_u32(v, c.max_fall);
+  const CarriedLightLevel c = carried_light_level(l, m);
+  put_u32(v, static_cast<std::uint32_t>(c.max_cll_nits) * 10000u);
+  put_u32(v, static_cast<std::uint32_t>(c.max_fall_nits) * 10000u);
   return v;
 }
 

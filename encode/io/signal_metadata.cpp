@@ -30,21 +30,9 @@ St2086Codes st2086_codes(const MasteringDisplay& m) {
   return s;
 }
 
-CarriedLight carried_light(const ContentLightLevel& light, const MasteringDisplay& m, double unit_nits,
-                           double max_units) {
-  const auto peak = to_units(m.max_nits, unit_nits, max_units, true);
-  auto carried = [&](double nits) {
-    const auto u = to_units(nits, unit_nits, max_units, true);
-    return u != 0 ? u : peak;
-  };
-  CarriedLight c{carried(light.max_cll_nits), carried(light.max_fall_nits)};
-  c.max_fall = std::min(c.max_fall, c.max_cll);  // a frame average cannot exceed the brightest pixel
-  return c;
-}
-
 Cta861Light cta861_light(const ContentLightLevel& light, const MasteringDisplay& m) {
-  const CarriedLight c = carried_light(light, m, 1.0, 65535);
-  return {static_cast<std::uint16_t>(c.max_cll), static_cast<std::uint16_t>(c.max_fall)};
+  const CarriedLightLevel c = carried_light_level(light, m);
+  return {c.max_cll_nits, c.max_fall_nits};
 }
 
 }  // namespace hdrd::io

@@ -38,16 +38,8 @@ struct Cta861Light {
   std::uint16_t max_cll = 0;   // cd/m2
   std::uint16_t max_fall = 0;  // cd/m2
 };
-// Whole cd/m2, rounded up. 0 means "unknown" and some displays misbehave on it, so a value
-// that would be 0 becomes the mastering peak (REFERENCE.md §6); MaxFALL <= MaxCLL.
+// The values of carried_light_level() (encode/frame.hpp: the one rule for every carrier:
+// whole cd/m2 rounded up, 0 -> the mastering peak, MaxFALL <= MaxCLL) in CTA-861.3's form.
 Cta861Light cta861_light(const ContentLightLevel& light, const MasteringDisplay& m);
-// The same rule in any carrier's units: MaxCLL and MaxFALL in units of `unit_nits`, rounded
-// up, capped at `max_units`, 0 replaced by the mastering peak, MaxFALL <= MaxCLL. PNG cLLI
-// takes 0.0001 cd/m2 in u32; AVIF clli and CTA-861.3 whole cd/m2 in u16.
-struct CarriedLight {
-  std::uint32_t max_cll = 0, max_fall = 0;
-};
-CarriedLight carried_light(const ContentLightLevel& light, const MasteringDisplay& m, double unit_nits,
-                           double max_units);
 
 }  // namespace hdrd::io

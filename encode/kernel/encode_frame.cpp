@@ -52,14 +52,26 @@ struct PreparedUi {
   int w = 0, h = 0, x0 = 0, y0 = 0;
   float scale = 1, dim = 0, white = 203;
   bool srgb_blend = false;
+  SdrEotf eotf = SdrEotf::srgb;  // DisplayTarget::sdr_content_eotf: how the UI decodes to light
   bool active() const { return w > 0; }
 };
 
+// The SDR content EOTF from a table (UI values are mostly 8-bit levels; 1e-8 off the
+// function), one per EOTF, built once; sRGB's toe join (0.04045) is a node.
+const FloatBitsLut& sdr_eotf_table(SdrEotf e) {
+  auto make = [](SdrEotf which) {
+    const double kinks[] = {0.04045};
+    return FloatBitsLut([which](double v) { return sdr_eotf(which, v); }, -24, 1,
+                        which == SdrEotf::srgb ? std::span<const double>(kinks) : std::span<const double>());
+  };
+  static const FloatBitsLut tables[] = {make(SdrEotf::srgb), make(SdrEotf::gamma22), make(SdrEotf::bt1886)};
+  return tables[static_cast<int>(e)];
+}
+
 ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& container, double ui_white,
-                           bool srgb_blend) {
+                           bool srgb_blend, SdrEotf eotf) {
   const Mat3f to_c(color::rgb_to_rgb(color::kRec709, container));
-  // sRGB EOTF from a table (UI values are mostly 8-bit levels; 1e-8 off the function).
-  static const FloatBitsLut srgb([](double v) { return transfer::srgb_eotf(v); }, -24, 1);
+  const FloatBitsLut& decode = sdr_eotf_table(eotf);
   std::vector<float> px(o.rgba.size());
   float max_light = 0;
   const std::size_t n = static_cast<std::size_t>(o.width) * o.height;
@@ -74,7 +86,7 @@ ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& conta
       std::copy_n(enc, 3, out);
     } else {
       float lin[3];
-      for (int c = 0; c < 3; ++c) lin[c] = enc[c] > 0 ? srgb(enc[c]) : 0.0f;
+      for (int c = 0; c < 3; ++c) lin[c] = enc[c] > 0 ? decode(enc[c]) : 0.0f;
       const float k = static_cast<float>(ui_white) * a;
       for (int c = 0; c < 3; ++c) {
         out[c] = (to_c.m[c * 3] * lin[0] + to_c.m[c * 3 + 1] * lin[1] + to_c.m[c * 3 + 2] * lin[2]) * k;
@@ -89,12 +101,13 @@ ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& conta
 
 std::shared_ptr<const ConvertedUi> converted_overlay(const std::shared_ptr<const OverlayImage>& o,
                                                      const color::Primaries& container, double ui_white,
-                                                     bool srgb_blend) {
+                                                     bool srgb_blend, SdrEotf eotf) {
   struct Entry {
     std::weak_ptr<const OverlayImage> overlay;
     color::Primaries container;
     double ui_white;
     bool srgb_blend;
+    SdrEotf eotf;
     std::shared_ptr<const ConvertedUi> pixels;
   };
   static std::mutex mu;
@@ -102,12 +115,12 @@ std::shared_ptr<const ConvertedUi> converted_overlay(const std::shared_ptr<const
   {
     std::lock_guard lock(mu);
     if (last && last->overlay.lock() == o && last->container == container && last->ui_white == ui_white &&
-        last->srgb_blend == srgb_blend)
+        last->srgb_blend == srgb_blend && last->eotf == eotf)
       return last->pixels;
   }
-  auto px = std::make_shared<const ConvertedUi>(convert_overlay(*o, container, ui_white, srgb_blend));
+  auto px = std::make_shared<const ConvertedUi>(convert_overlay(*o, container, ui_white, srgb_blend, eotf));
   std::lock_guard lock(mu);
-  last = Entry{o, container, ui_white, srgb_blend, px};
+  last = Entry{o, container, ui_white, srgb_blend, eotf, px};
   return px;
 }
 
@@ -123,7 +136,9 @@ PreparedUi prepare_ui(const PreparedPipeline& p) {
   ui.dim = static_cast<float>(s.dim);
   ui.white = static_cast<float>(p.settings.target.ui_white_nits);
   ui.srgb_blend = s.srgb_blend;
-  ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend);
+  ui.eotf = p.settings.target.sdr_content_eotf;
+  ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend,
+                                ui.eotf);
   ui.px = ui.pixels->px.data();
   return ui;
 }
@@ -148,7 +163,8 @@ std::array<float, 4> sample_ui(const PreparedUi& ui, int x, int y) {
 }
 
 // REFERENCE.md §1.6: blend UI sample s over one display-referred pixel in linear light
-// (or in sRGB encoding relative to UI white, for UIs authored that way).
+// (or in the UI's own encoding relative to UI white, for UIs authored that way: sRGB, or
+// the SDR content EOTF the target names).
 void composite_ui_pixel(const PreparedUi& ui, const std::array<float, 4>& s, float* px) {
   const float a = s[3];
   if (a <= 0) return;
@@ -159,9 +175,9 @@ void composite_ui_pixel(const PreparedUi& ui, const std::array<float, 4>& s, flo
   }
   // s holds alpha-weighted encoded values (bilinear of straight values would bleed).
   for (int c = 0; c < 3; ++c) {
-    const double bg = transfer::srgb_inverse_eotf(std::clamp(px[c] * (1 - ui.dim * a) / ui.white, 0.0f, 1.0f));
+    const double bg = sdr_inverse_eotf(ui.eotf, std::clamp(px[c] * (1 - ui.dim * a) / ui.white, 0.0f, 1.0f));
     const double enc = s[c] + bg * (1 - a);
-    px[c] = static_cast<float>(transfer::srgb_eotf(enc) * ui.white);
+    px[c] = static_cast<float>(sdr_eotf(ui.eotf, enc) * ui.white);
   }
 }
 
@@ -242,10 +258,14 @@ void stage_tone(const FrameJob& job, int n, float* row) {
       break;
     case ToneKind::per_channel:
       for (int i = 0; i < n * 4; i += 4)
-        for (int c = 0; c < 3; ++c) row[i + c] = t.lut(row[i + c]);
+        for (int c = 0; c < 3; ++c) row[i + c] = detail::toe_lookup(t.lut, t.zero_nits, t.toe_slope, row[i + c]);
       break;
     case ToneKind::ratio:
       kernels::tone_ratio(row, n, t.lut, t.ratio_of_luminance, job.container_is_working ? nullptr : job.to_c.m);
+      if (t.has_lift)
+        for (int i = 0; i < n * 4; i += 4)
+          for (int c = 0; c < 3; ++c)
+            row[i + c] = detail::toe_lookup(t.lift, t.lift_zero_nits, t.lift_toe_slope, row[i + c]);
       break;
     case ToneKind::reference: {
       const auto& p = *job.p;
@@ -285,7 +305,37 @@ void stage_container(const FrameJob& job, int n, float* row) {
   }
 }
 
-void stage_encode(const FrameJob& job, int y, int x0, int n, const float* row, ContentLightAccumulator& cll) {
+// Container light after the UI -> inside the mode's displayable volume, in place (the
+// dump is written after this): the cube clamp, the HLG volume (fit_volume, taken only by
+// the pixels whose scene light would pass 1) and, when the dump is kept, the black floors.
+// Returns the HLG scene-light scale k (0 for the other modes) for the encoder.
+float to_volume(const FrameJob& job, const SignalStage& s, float* px) {
+  const auto& t = job.p->settings.target;
+  const float peak = static_cast<float>(t.peak_nits);
+  for (int c = 0; c < 3; ++c) px[c] = std::clamp(px[c], 0.0f, peak);
+  float k = 0;
+  auto scale = [&] {
+    const float yd = 0.2627f * px[0] + 0.6780f * px[1] + 0.0593f * px[2];
+    return yd > 0 ? std::pow(yd / s.hlg_peak, (1 - s.hlg_gamma) / s.hlg_gamma) / s.hlg_peak : 0.0f;
+  };
+  auto put = [&](Vec3 v) {
+    px[0] = static_cast<float>(v.x), px[1] = static_cast<float>(v.y), px[2] = static_cast<float>(v.z);
+  };
+  if (s.mode == Mode::hlg) {
+    k = scale();
+    if (std::max({px[0], px[1], px[2]}) * k > 1 + detail::kGamutTolerance) {
+      put(detail::fit_volume({px[0], px[1], px[2]}, t, job.p->settings.gamut));
+      k = scale();
+    }
+  }
+  if (job.frame->display_nits && detail::has_black_floor(t)) {
+    put(detail::displayed_light({px[0], px[1], px[2]}, t));
+    if (s.mode == Mode::hlg) k = scale();
+  }
+  return k;
+}
+
+void stage_encode(const FrameJob& job, int y, int x0, int n, float* row, ContentLightAccumulator& cll) {
   EncodedFrame& f = *job.frame;
   const SignalStage& s = *job.sig;
   const bool dither = job.p->settings.dither;
@@ -318,14 +368,12 @@ void stage_encode(const FrameJob& job, int y, int x0, int n, const float* row, C
 
   std::array<float, 3> e;
   for (int x = 0; x < n; ++x) {
-    const float* px = row + x * 4;
+    float* px = row + x * 4;
+    const float k = to_volume(job, s, px);
     if (s.mode == Mode::hlg) {
-      // BT.2100 inverse OOTF (luminance-based, not separable), then the OETF per channel.
-      const float r = std::max(px[0], 0.0f), g = std::max(px[1], 0.0f), b = std::max(px[2], 0.0f);
-      const float yd = 0.2627f * r + 0.6780f * g + 0.0593f * b;
-      const float k = yd > 0 ? std::pow(yd / s.hlg_peak, (1 - s.hlg_gamma) / s.hlg_gamma) / s.hlg_peak : 0.0f;
-      e = {s.signal(std::min(r * k, 1.0f)), s.signal(std::min(g * k, 1.0f)), s.signal(std::min(b * k, 1.0f))};
-      if (yd <= 0) e = {s.signal(0), s.signal(0), s.signal(0)};
+      // BT.2100 inverse OOTF (a scale of the luminance alone), then the OETF per channel
+      // with the black lift (the signal table).
+      e = {s.signal(std::min(px[0] * k, 1.0f)), s.signal(std::min(px[1] * k, 1.0f)), s.signal(std::min(px[2] * k, 1.0f))};
     } else {
       e = {s.signal(px[0]), s.signal(px[1]), s.signal(px[2])};
     }
@@ -457,9 +505,9 @@ void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulat
     }
     run_staged(job, y, 0, w, row.data());
     if (job.ui->active()) composite_ui_row(*job.ui, y, w, row.data());
+    stage_encode(job, y, 0, w, row.data(), cll);  // moves the light into the displayable volume first
     if (job.frame->display_nits)
       std::memcpy(job.frame->display_nits->px(0, y), row.data(), row.size() * sizeof(float));
-    stage_encode(job, y, 0, w, row.data(), cll);
   }
 }
 
@@ -479,13 +527,21 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
     default: return std::nullopt;
   }
   auto view = [](const FloatBitsLut& l) {
-    return kernels::LutView{l.table().data(), l.pairs().data(), l.base_bits(), l.lo(), l.hi(),
-                            std::nextafter(l.hi(), 0.0f), l.flat_below()};
+    return kernels::LutView{l.table().data(),  l.pairs().data(), l.base_bits(),
+                            l.lo(),            l.hi(),           std::nextafter(l.hi(), 0.0f),
+                            l.flat_below(),    l.patches().data(), static_cast<int>(l.patches().size())};
   };
   r.m_in = job.m_in.m;
   r.paper_white = job.tone->paper_white;
   r.peak = job.tone->peak;
   if (job.tone->kind != ToneKind::clip) r.tone_lut = view(job.tone->lut);
+  r.tone_zero = job.tone->zero_nits;
+  r.tone_toe_slope = job.tone->toe_slope;
+  if (job.tone->has_lift) {
+    r.lift = view(job.tone->lift);
+    r.lift_zero = job.tone->lift_zero_nits;
+    r.lift_toe_slope = job.tone->lift_toe_slope;
+  }
   r.m_container = job.container_is_working ? nullptr : job.to_c.m;
   if (t.mode == Mode::scrgb) {
     r.out_kind = kernels::FusedOut::scrgb;

@@ -22,8 +22,18 @@ using DU = hn::RebindToUnsigned<DF>;
 using DI = hn::RebindToSigned<DF>;
 using VF = hn::Vec<DF>;
 
+HWY_INLINE VF lut(DF df, const LutView& l, VF v);
+
+// ToneStage's lookup with a toe (pipeline_internal.hpp toe_lookup): below the table's
+// bottom the straight line from f(0); v >= 0.
+HWY_INLINE VF toe_lut(DF df, const LutView& l, float zero, float slope, VF v) {
+  const VF toe = hn::MulAdd(v, hn::Set(df, slope), hn::Set(df, zero));
+  return hn::IfThenElse(hn::Lt(v, hn::Set(df, l.lo)), toe, lut(df, l, v));
+}
+
 // FloatBitsLut::operator() for a vector: clamp into [lo, hi), index from the float's bits,
-// linear interpolation inside the bucket.
+// linear interpolation inside the bucket, and the hats of the kinks in it (rare: one
+// compare per kink decides that no lane needs them).
 HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
   const DU du;
   const DI di;
@@ -43,12 +53,26 @@ HWY_INLINE VF lut(DF df, const LutView& l, VF v) {
   const __m512i odd = _mm512_set_epi32(31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3, 1);
   const VF a{_mm512_permutex2var_ps(lo8, even, hi8)};
   const VF step{_mm512_permutex2var_ps(lo8, odd, hi8)};
-  return hn::MulAdd(step, frac, a);
+  VF r = hn::MulAdd(step, frac, a);
 #else
   const VF a = hn::GatherIndex(df, l.table, idx);
   const VF b = hn::GatherIndex(df, l.table + 1, idx);
-  return hn::MulAdd(hn::Sub(b, a), frac, a);
+  VF r = hn::MulAdd(hn::Sub(b, a), frac, a);
 #endif
+  if (l.patch_count == 0) return r;
+  auto any = hn::Eq(idx, hn::Set(di, static_cast<std::int32_t>(l.patches[0].bucket)));
+  for (int j = 1; j < l.patch_count; ++j)
+    any = hn::Or(any, hn::Eq(idx, hn::Set(di, static_cast<std::int32_t>(l.patches[j].bucket))));
+  if (hn::AllFalse(di, any)) return r;
+  for (int j = 0; j < l.patch_count; ++j) {
+    const FloatBitsLut::Patch& p = l.patches[j];
+    const auto in = hn::RebindMask(df, hn::Eq(idx, hn::Set(di, static_cast<std::int32_t>(p.bucket))));
+    const VF up = hn::Mul(hn::Sub(frac, hn::Set(df, p.left)), hn::Set(df, p.inv_left));
+    const VF down = hn::Mul(hn::Sub(hn::Set(df, p.right), frac), hn::Set(df, p.inv_right));
+    const VF hat = hn::Max(hn::Zero(df), hn::Min(up, down));
+    r = hn::IfThenElse(in, hn::MulAdd(hat, hn::Set(df, p.delta), r), r);
+  }
+  return r;
 }
 
 HWY_INLINE VF signal(DF df, const FusedRow& r, VF v) { return lut(df, r.signal, v); }
@@ -169,6 +193,7 @@ struct RuntimeSpec {
   bool quant() const { return r->codes.table != nullptr; }
   bool cll() const { return r->code_to_nits != nullptr; }
   bool signal16() const { return r->signal16 != nullptr; }
+  bool lift() const { return r->lift.table != nullptr; }
   static constexpr bool below_top() { return false; }
 };
 
@@ -181,6 +206,7 @@ struct Hdr10Spec {
   static constexpr bool quant() { return true; }
   static constexpr bool cll() { return true; }
   static constexpr bool signal16() { return false; }
+  static constexpr bool lift() { return false; }
   // No code input lies above the quantiser's table, so its upper clamp goes: the ratio of
   // max(RGB) keeps each channel at or below the peak (the curves never pass it:
   // tonemap_test; 0.1 % covers the table's interpolation), and the UI adds at most ui_max.
@@ -188,7 +214,8 @@ struct Hdr10Spec {
   static bool matches(const FusedRow& r) {
     const RuntimeSpec s{&r};
     if (!(s.half() == half() && s.tone() == tone() && s.container() == container() && s.gamut() == gamut() &&
-          s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16()))
+          s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16() &&
+          s.lift() == lift()))
       return false;
     const float top = std::bit_cast<float>(r.codes.base_bits + r.codes.top_rel);
     return r.peak * 1.001f + (r.ui ? r.ui_max : 0.0f) < top;
@@ -249,7 +276,9 @@ HWY_INLINE void tone(DF df, const Spec& spec, const FusedRow& r, const MatV& m_c
       break;
     }
     case FusedTone::per_channel:
-      R = lut(df, r.tone_lut, R), G = lut(df, r.tone_lut, G), B = lut(df, r.tone_lut, B);
+      R = toe_lut(df, r.tone_lut, r.tone_zero, r.tone_toe_slope, R);
+      G = toe_lut(df, r.tone_lut, r.tone_zero, r.tone_toe_slope, G);
+      B = toe_lut(df, r.tone_lut, r.tone_zero, r.tone_toe_slope, B);
       break;
     default: {
       VF k = spec.tone() == FusedTone::ratio_max
@@ -276,6 +305,11 @@ HWY_INLINE void tone(DF df, const Spec& spec, const FusedRow& r, const MatV& m_c
         if (!hn::AllFalse(df, hn::Gt(k, top))) ratio = hn::Mul(ratio, hn::Min(hn::Set(df, 1.0f), hn::Div(top, k)));
       }
       R = hn::Mul(R, ratio), G = hn::Mul(G, ratio), B = hn::Mul(B, ratio);
+      if (spec.lift()) {
+        R = toe_lut(df, r.lift, r.lift_zero, r.lift_toe_slope, R);
+        G = toe_lut(df, r.lift, r.lift_zero, r.lift_toe_slope, G);
+        B = toe_lut(df, r.lift, r.lift_zero, r.lift_toe_slope, B);
+      }
     }
   }
 }
@@ -330,6 +364,10 @@ HWY_INLINE hn::Mask<DF> container_light(DF df, const Spec& spec, FusedRow& r, co
     VF ur, ug, ub, keep;
     hn::LoadInterleaved4(df, r.ui + static_cast<std::size_t>(x) * 4, ur, ug, ub, keep);
     R = hn::MulAdd(R, keep, ur), G = hn::MulAdd(G, keep, ug), B = hn::MulAdd(B, keep, ub);
+    if (r.ui_max > r.peak) {
+      const VF pk = hn::Set(df, r.peak);
+      R = hn::Min(R, pk), G = hn::Min(G, pk), B = hn::Min(B, pk);
+    }
   }
   return ok;
 }

@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "encode/kernel/float_lut.hpp"
+
 namespace hdrd::kernels {
 
 struct LutView {
@@ -17,6 +19,8 @@ struct LutView {
   float lo = 0, hi = 0;
   float hi_prev = 0;  // the largest float below hi
   float flat_below = 0;  // FloatBitsLut::flat_below(): below it the lookup is table[0] exactly
+  const FloatBitsLut::Patch* patches = nullptr;  // FloatBitsLut::patches(): its kinks
+  int patch_count = 0;
 };
 
 // FloatBitsQuantizer (float_lut.hpp) for a vector.
@@ -37,12 +41,16 @@ struct FusedRow {
   const float* m_in = nullptr;  // 3x3 row-major, exposure folded in
   FusedTone tone = FusedTone::clip;
   float paper_white = 203, peak = 1000;
-  LutView tone_lut;
+  LutView tone_lut;                    // per_channel: the curve's table with a toe (ToneStage)
+  float tone_zero = 0, tone_toe_slope = 0;
+  LutView lift;                        // ratio: per-channel black lift (table null: none)
+  float lift_zero = 0, lift_toe_slope = 0;
   const float* m_container = nullptr;  // null: container = working (Rec.2020)
   float gamut_lo = 0, gamut_hi = 0;    // accepted container range (tolerances included)
   bool gamut_check = true;             // false: the tone keeps every pixel in [0, peak]
   // UI blended in linear container light after the gamut check (not for scRGB): n x
-  // (premultiplied nits r, g, b, fraction of the frame kept), or null.
+  // (premultiplied nits r, g, b, fraction of the frame kept), or null. Where ui_max passes
+  // the peak the blend is clipped to it (the displayable volume).
   const float* ui = nullptr;
   float ui_max = 0;  // the largest r, g or b in ui
   FusedOut out_kind = FusedOut::packed10;

@@ -4,7 +4,8 @@
 
 namespace hdrd {
 
-FloatBitsLut::FloatBitsLut(const std::function<double(double)>& f, int min_exp2, int max_exp2) {
+FloatBitsLut::FloatBitsLut(const std::function<double(double)>& f, int min_exp2, int max_exp2,
+                           std::span<const double> kinks) {
   lo_ = std::ldexp(1.0f, min_exp2);
   hi_ = std::ldexp(1.0f, max_exp2);
   base_bits_ = std::bit_cast<std::uint32_t>(lo_);
@@ -19,10 +20,46 @@ FloatBitsLut::FloatBitsLut(const std::function<double(double)>& f, int min_exp2,
     pairs_[2 * i] = table_[i];
     pairs_[2 * i + 1] = table_[i + 1] - table_[i];
   }
-  // Buckets 0 .. j - 1 hold table_[0] at both ends (a zero step): flat up to bucket j.
+  add_patches(f, kinks);
+  // Buckets 0 .. j - 1 hold table_[0] at both ends (a zero step) and no patch: flat up to bucket j.
   std::size_t j = 0;
-  while (j < n && table_[j + 1] == table_[0]) ++j;
+  auto patched = [&](std::size_t b) {
+    return std::any_of(patches_.begin(), patches_.end(), [&](const Patch& p) { return p.bucket == b; });
+  };
+  while (j < n && table_[j + 1] == table_[0] && !patched(j)) ++j;
   if (j > 0) flat_below_ = j < n ? std::bit_cast<float>(base_bits_ + static_cast<std::uint32_t>(j << kShift)) : hi_;
+}
+
+void FloatBitsLut::add_patches(const std::function<double(double)>& f, std::span<const double> kinks) {
+  constexpr std::uint32_t kMask = (1u << kShift) - 1;
+  constexpr float kStep = 1.0f / (1u << kShift);
+  // The kinks inside the table, as the float the lookup sees, by bucket and position.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> at;  // (bucket, position in it)
+  for (double k : kinks) {
+    const float v = static_cast<float>(k);
+    if (!(v > lo_ && v < hi_)) continue;
+    const std::uint32_t rel = std::bit_cast<std::uint32_t>(v) - base_bits_;
+    if ((rel & kMask) != 0) at.emplace_back(rel >> kShift, rel & kMask);
+  }
+  std::sort(at.begin(), at.end());
+  at.erase(std::unique(at.begin(), at.end()), at.end());
+  if (at.size() > kMaxPatches) at.resize(kMaxPatches);
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    const auto [bucket, pos] = at[i];
+    Patch p;
+    p.bucket = bucket;
+    p.at = static_cast<float>(pos) * kStep;
+    p.left = i > 0 && at[i - 1].first == bucket ? static_cast<float>(at[i - 1].second) * kStep : 0.0f;
+    p.right = i + 1 < at.size() && at[i + 1].first == bucket ? static_cast<float>(at[i + 1].second) * kStep : 1.0f;
+    p.inv_left = 1.0f / (p.at - p.left);
+    p.inv_right = 1.0f / (p.right - p.at);
+    // In the nodal basis of the bucket's nodes, the interpolant through every node is the
+    // straight line plus, per kink, (f(kink) - line(kink)) times the kink's hat.
+    const float x = std::bit_cast<float>(base_bits_ + (bucket << kShift) + pos);
+    const double line = table_[bucket] + (static_cast<double>(table_[bucket + 1]) - table_[bucket]) * p.at;
+    p.delta = static_cast<float>(f(static_cast<double>(x)) - line);
+    patches_.push_back(p);
+  }
 }
 
 FloatBitsQuantizer::FloatBitsQuantizer(const std::function<int(double)>& code, int min_exp2, int max_exp2) {

@@ -4,6 +4,13 @@
 // transfer and tone functions reproduce to ~1e-8 with 128 points per octave, at the cost
 // of a shift, a subtract and two loads: this is how the fast encode path evaluates PQ,
 // sRGB, BT.1886, HLG and baked tone curves.
+//
+// A kink (where the function's slope jumps: a clamp at a peak, a curve's white point, a
+// black level) inside a bucket would be interpolated across and missed by up to a quarter
+// of the slope jump times the bucket width (BT.2390's corner at the source peak came out
+// 11 16-bit PNG steps low). The kinks a function declares become nodes of their own: the
+// bucket's straight line plus a hat function through the kink's value ("patches"), so
+// each side of a kink interpolates only its own side.
 #pragma once
 
 #include <algorithm>
@@ -11,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 namespace hdrd {
@@ -20,9 +28,26 @@ class FloatBitsLut {
   static constexpr int kBitsPerOctave = 7;
   static constexpr int kShift = 23 - kBitsPerOctave;
 
+  // A kink inside bucket `bucket`: the lookup adds delta x hat(frac), the hat rising from
+  // `left` to 1 at `at` and falling to 0 at `right` (its neighbouring nodes: the bucket's
+  // ends or other kinks in it), delta = f(kink) - the bucket's straight line at `at`.
+  // Positions are the lookup's fraction inside the bucket (multiples of 2^-kShift).
+  struct Patch {
+    std::uint32_t bucket = 0;
+    float left = 0, at = 0, right = 1;
+    float inv_left = 1, inv_right = 1;  // 1 / (at - left), 1 / (right - at)
+    float delta = 0;
+    float hat(float frac) const {
+      return std::max(0.0f, std::min((frac - left) * inv_left, (right - frac) * inv_right));
+    }
+  };
+  static constexpr std::size_t kMaxPatches = 8;
+
   FloatBitsLut() = default;
-  // Tabulates f on [2^min_exp2, 2^max_exp2].
-  FloatBitsLut(const std::function<double(double)>& f, int min_exp2, int max_exp2);
+  // Tabulates f on [2^min_exp2, 2^max_exp2], with a node on each of `kinks` inside that
+  // range (at most kMaxPatches; a kink that falls on a bucket's end needs none).
+  FloatBitsLut(const std::function<double(double)>& f, int min_exp2, int max_exp2,
+               std::span<const double> kinks = {});
 
   // Below the range: the value at the bottom; above: the value at the top.
   float operator()(float v) const {
@@ -33,7 +58,10 @@ class FloatBitsLut {
     const std::uint32_t i = rel >> kShift;
     const float frac = static_cast<float>(rel & ((1u << kShift) - 1)) * (1.0f / (1u << kShift));
     const float a = table_[i], b = table_[i + 1];
-    return a + (b - a) * frac;
+    float r = a + (b - a) * frac;
+    for (const Patch& p : patches_)
+      if (p.bucket == i) r += p.delta * p.hat(frac);
+    return r;
   }
 
   float lo() const { return lo_; }
@@ -46,12 +74,16 @@ class FloatBitsLut {
   // Where the table is flat from its bottom: every v < flat_below() (negative values and
   // those below lo() included) looks up exactly table().front(), with no interpolation
   // step. 0 when the first bucket already slopes. A curve that is linear below a knee
-  // (a ratio table that is constant there) lets SIMD code skip the lookup below it.
+  // (a ratio table that is constant there) lets SIMD code skip the lookup below it. It
+  // ends at the first patched bucket too.
   float flat_below() const { return flat_below_; }
+  const std::vector<Patch>& patches() const { return patches_; }
 
  private:
+  void add_patches(const std::function<double(double)>& f, std::span<const double> kinks);
   std::vector<float> table_;
   std::vector<float> pairs_;
+  std::vector<Patch> patches_;
   std::uint32_t base_bits_ = 0;
   float lo_ = 0, hi_ = 0;
   float flat_below_ = 0;

@@ -15,7 +15,7 @@ namespace hdrd::gpu {
 using color::Mat3;
 using detail::ToneKind;
 
-static_assert(sizeof(EncodeUniforms) == 192, "std140 HdrdEncode is 192 bytes");
+static_assert(sizeof(EncodeUniforms) == 224, "std140 HdrdEncode is 224 bytes");
 static_assert(offsetof(EncodeUniforms, m_container) == 48);
 static_assert(offsetof(EncodeUniforms, paper_white) == 96);
 static_assert(offsetof(EncodeUniforms, tone_lo) == 112);
@@ -23,6 +23,8 @@ static_assert(offsetof(EncodeUniforms, signal_hi_prev) == 128);
 static_assert(offsetof(EncodeUniforms, tone_base) == 144);
 static_assert(offsetof(EncodeUniforms, ui_x0) == 160);
 static_assert(offsetof(EncodeUniforms, ui_w) == 176);
+static_assert(offsetof(EncodeUniforms, tone_zero) == 192);
+static_assert(offsetof(EncodeUniforms, lift_lo) == 208);
 
 namespace {
 
@@ -33,24 +35,43 @@ constexpr const char* kBlock = R"(layout(std140, binding = 3) uniform HdrdEncode
   vec4 levels;      // paper_white, peak, code_scale, code_offset
   vec4 tone_range;  // tone_lo, tone_hi_prev, tone_hi, signal_lo
   vec4 misc;        // signal_hi_prev, hlg_peak, hlg_gamma, ui_dim
-  uvec4 bases;      // tone_base, signal_base, max_code, -
+  uvec4 bases;      // tone_base, signal_base, max_code, lift_base
   vec4 ui_place;    // ui_x0, ui_y0, ui_scale, gamut_lo
   ivec4 ui_size;    // ui_w, ui_h, -, -
+  vec4 toes;        // tone_zero, tone_toe_slope, lift_zero, lift_toe_slope
+  vec4 lift_range;  // lift_lo, lift_hi_prev, -, -
 } hdrd_u;
 )";
 
 // Mirrors FloatBitsLut::operator() (float_lut.hpp): index from the float's bits,
-// linear interpolation in the bucket.
-constexpr const char* kLut = R"(float hdrd_lut(highp sampler2D t, uint base_bits, float lo, float hi_prev, float v) {
+// linear interpolation in the bucket; each table's wrapper adds its kinks' hats
+// (lut_function below), whose constants come from FloatBitsLut::patches().
+constexpr const char* kLut = R"(float hdrd_lut(highp sampler2D t, uint base_bits, float lo, float hi_prev, float v,
+               out int i, out float f) {
   v = clamp(v, lo, hi_prev);
   uint rel = floatBitsToUint(v) - base_bits;
-  int i = int(rel >> %SHIFT%u);
-  float f = float(rel & %MASK%u) * %INV%;
+  i = int(rel >> %SHIFT%u);
+  f = float(rel & %MASK%u) * %INV%;
   float a = texelFetch(t, ivec2(i, 0), 0).r;
   float b = texelFetch(t, ivec2(i + 1, 0), 0).r;
   return a + (b - a) * f;
 }
 )";
+
+std::string glsl_float(double v) { return fmt::format("{:.9e}", v); }
+
+// `float NAME(float v)`: the lookup of one table with its patches baked in.
+std::string lut_function(const std::string& name, const std::string& sampler, const std::string& args,
+                         const FloatBitsLut& l) {
+  std::string g = fmt::format("uniform highp sampler2D {};\nfloat {}(float v) {{\n  int i; float f;\n"
+                              "  float r = hdrd_lut({}, {}, v, i, f);\n",
+                              sampler, name, sampler, args);
+  for (const auto& p : l.patches())
+    g += fmt::format("  if (i == {}) r += {} * max(0.0, min((f - {}) * {}, ({} - f) * {}));\n", p.bucket,
+                     glsl_float(p.delta), glsl_float(p.left), glsl_float(p.inv_left), glsl_float(p.right),
+                     glsl_float(p.inv_right));
+  return g + "  return r;\n}\n";
+}
 
 // Mirrors sample_ui() in encode_frame.cpp: bilinear on premultiplied container nits.
 constexpr const char* kUi = R"(vec4 hdrd_ui_sample(ivec2 p) {
@@ -87,7 +108,9 @@ std::string tone_glsl(const detail::ToneStage& t, bool container_max) {
     case ToneKind::clip:
       return "  vec3 nits = min(w * hdrd_u.levels.x, vec3(hdrd_u.levels.y));\n";
     case ToneKind::per_channel:
-      return "  vec3 nits = vec3(hdrd_tone(w.r), hdrd_tone(w.g), hdrd_tone(w.b));\n";
+      // ToneStage's toe: f(0) + x slope below the table's bottom (toe_lookup).
+      return "  vec3 nits = mix(vec3(hdrd_tone(w.r), hdrd_tone(w.g), hdrd_tone(w.b)), hdrd_u.toes.x + w * hdrd_u.toes.y,\n"
+             "                 lessThan(w, vec3(hdrd_u.tone_range.x)));\n";
     case ToneKind::ratio: {
       std::string s = t.ratio_of_luminance ? "  float k = dot(vec3(0.2627, 0.6780, 0.0593), w);\n"
                                            : "  float k = max(max(w.r, w.g), w.b);\n";
@@ -96,6 +119,9 @@ std::string tone_glsl(const detail::ToneStage& t, bool container_max) {
       }
       s += "  float ratio = k > 0.0 ? hdrd_tone(k) * min(1.0, hdrd_u.tone_range.z / k) : 0.0;\n"
            "  vec3 nits = w * ratio;\n";
+      if (t.has_lift)
+        s += "  nits = mix(vec3(hdrd_lift(nits.r), hdrd_lift(nits.g), hdrd_lift(nits.b)), hdrd_u.toes.z + nits * hdrd_u.toes.w,\n"
+             "             lessThan(nits, vec3(hdrd_u.lift_range.x)));\n";
       return s;
     }
     default:
@@ -153,6 +179,13 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   };
   if (tone.kind != ToneKind::clip) table("hdrd_tone_lut", tone.lut, u.tone_lo, u.tone_hi_prev, u.tone_base);
   u.tone_hi = tone.kind != ToneKind::clip ? tone.lut.hi() : 0.0f;
+  u.tone_zero = tone.zero_nits;
+  u.tone_toe_slope = tone.toe_slope;
+  if (tone.has_lift) {
+    table("hdrd_lift_lut", tone.lift, u.lift_lo, u.lift_hi_prev, u.lift_base);
+    u.lift_zero = tone.lift_zero_nits;
+    u.lift_toe_slope = tone.lift_toe_slope;
+  }
   if (t.mode != Mode::scrgb) table("hdrd_signal_lut", sig.signal, u.signal_lo, u.signal_hi_prev, u.signal_base);
 
   // The overlay, prepared exactly as the CPU prepares it (premultiplied container nits).
@@ -164,8 +197,9 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
       const double a = std::clamp<double>(o.rgba[i + 3], 0.0, 1.0);
       color::Vec3 enc{o.rgba[i], o.rgba[i + 1], o.rgba[i + 2]};
       if (o.premultiplied) enc = a > 0 ? enc * (1.0 / a) : color::Vec3{};
-      const color::Vec3 nits = ui_to_c * color::Vec3{transfer::srgb_eotf(enc.x), transfer::srgb_eotf(enc.y),
-                                                     transfer::srgb_eotf(enc.z)} * (t.ui_white_nits * a);
+      const SdrEotf eotf = t.sdr_content_eotf;
+      const color::Vec3 nits = ui_to_c * color::Vec3{sdr_eotf(eotf, enc.x), sdr_eotf(eotf, enc.y),
+                                                     sdr_eotf(eotf, enc.z)} * (t.ui_white_nits * a);
       prog.ui[i] = static_cast<float>(nits.x);
       prog.ui[i + 1] = static_cast<float>(nits.y);
       prog.ui[i + 2] = static_cast<float>(nits.z);
@@ -188,16 +222,12 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   g += replace_all(replace_all(replace_all(kLut, "%SHIFT%", std::to_string(FloatBitsLut::kShift)), "%MASK%",
                                std::to_string((1u << FloatBitsLut::kShift) - 1)),
                    "%INV%", fmt::format("{:.9e}", 1.0 / (1u << FloatBitsLut::kShift)));
-  if (tone.kind != ToneKind::clip) {
-    g += "uniform highp sampler2D hdrd_tone_lut;\n"
-         "float hdrd_tone(float v) { return hdrd_lut(hdrd_tone_lut, hdrd_u.bases.x, hdrd_u.tone_range.x, "
-         "hdrd_u.tone_range.y, v); }\n";
-  }
-  if (t.mode != Mode::scrgb) {
-    g += "uniform highp sampler2D hdrd_signal_lut;\n"
-         "float hdrd_signal(float v) { return hdrd_lut(hdrd_signal_lut, hdrd_u.bases.y, hdrd_u.tone_range.w, "
-         "hdrd_u.misc.x, v); }\n";
-  }
+  if (tone.kind != ToneKind::clip)
+    g += lut_function("hdrd_tone", "hdrd_tone_lut", "hdrd_u.bases.x, hdrd_u.tone_range.x, hdrd_u.tone_range.y", tone.lut);
+  if (tone.has_lift)
+    g += lut_function("hdrd_lift", "hdrd_lift_lut", "hdrd_u.bases.w, hdrd_u.lift_range.x, hdrd_u.lift_range.y", tone.lift);
+  if (t.mode != Mode::scrgb)
+    g += lut_function("hdrd_signal", "hdrd_signal_lut", "hdrd_u.bases.y, hdrd_u.tone_range.w, hdrd_u.misc.x", sig.signal);
   if (s.ui.overlay) g += std::string("uniform highp sampler2D hdrd_ui;\n") + kUi;
 
   g += "uvec4 hdrd_encode(vec3 rgb, ivec2 pixel) {\n"
@@ -207,9 +237,11 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   g += tone_glsl(tone, !container_is_working);
   g += container_is_working ? "  vec3 c = nits;\n" : "  vec3 c = hdrd_u.m_container * nits;\n";
   if (t.mode != Mode::scrgb) g += "  c = clamp(c, vec3(0.0), vec3(hdrd_u.levels.y));\n";
-  if (s.ui.overlay)
+  if (s.ui.overlay) {
     g += "  vec4 ui = hdrd_ui_sample(pixel);\n"
          "  if (ui.a > 0.0) c = ui.rgb + c * ((1.0 - ui.a) * (1.0 - hdrd_u.misc.w * ui.a));\n";
+    if (t.mode != Mode::scrgb) g += "  c = min(c, vec3(hdrd_u.levels.y));  // the displayable volume's cube\n";
+  }
   if (t.mode == Mode::scrgb) {
     g += "  vec3 s = c * (1.0 / 80.0);\n"
          "  return uvec4(packHalf2x16(s.rg), packHalf2x16(vec2(s.b, 1.0)), 0u, 0u);\n}\n";
@@ -220,8 +252,16 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   }
   if (t.mode == Mode::hlg) {
     g += "  float yd = dot(vec3(0.2627, 0.6780, 0.0593), c);\n"
-         "  float kk = yd > 0.0 ? pow(yd / hdrd_u.misc.y, (1.0 - hdrd_u.misc.z) / hdrd_u.misc.z) / hdrd_u.misc.y : 0.0;\n"
-         "  vec3 e = vec3(hdrd_signal(min(c.r * kk, 1.0)), hdrd_signal(min(c.g * kk, 1.0)), hdrd_signal(min(c.b * kk, 1.0)));\n";
+         "  float kk = yd > 0.0 ? pow(yd / hdrd_u.misc.y, (1.0 - hdrd_u.misc.z) / hdrd_u.misc.z) / hdrd_u.misc.y : 0.0;\n";
+    if (s.gamut == GamutMapping::ictcp)
+      // pipeline.cpp fit_volume: toward the grey of the same luminance, where kk is the same,
+      // by the largest scale that keeps every channel's scene light at or below 1.
+      g += fmt::format("  if (max(max(c.r, c.g), c.b) * kk > {}) {{\n"
+                       "    vec3 d = c - vec3(yd);\n    float room = 1.0 / kk - yd, s = 1.0;\n"
+                       "    if (d.r > 0.0) s = min(s, room / d.r);\n    if (d.g > 0.0) s = min(s, room / d.g);\n"
+                       "    if (d.b > 0.0) s = min(s, room / d.b);\n    c = vec3(yd) + max(s, 0.0) * d;\n  }}\n",
+                       glsl_float(1.0 + detail::kGamutTolerance));
+    g += "  vec3 e = vec3(hdrd_signal(min(c.r * kk, 1.0)), hdrd_signal(min(c.g * kk, 1.0)), hdrd_signal(min(c.b * kk, 1.0)));\n";
   } else {
     g += "  vec3 e = vec3(hdrd_signal(c.r), hdrd_signal(c.g), hdrd_signal(c.b));\n";
   }

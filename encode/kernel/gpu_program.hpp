@@ -33,9 +33,11 @@ struct alignas(16) EncodeUniforms {
   float paper_white, peak, code_scale, code_offset;
   float tone_lo, tone_hi_prev, tone_hi, signal_lo;
   float signal_hi_prev, hlg_peak, hlg_gamma, ui_dim;
-  std::uint32_t tone_base, signal_base, max_code, pad0;
+  std::uint32_t tone_base, signal_base, max_code, lift_base;
   float ui_x0, ui_y0, ui_scale, gamut_lo;
   std::int32_t ui_w, ui_h, pad1, pad2;
+  float tone_zero, tone_toe_slope, lift_zero, lift_toe_slope;  // ToneStage's toes
+  float lift_lo, lift_hi_prev, pad3, pad4;
 };
 
 struct Table {

@@ -3,6 +3,7 @@
 #include "encode/tone/tonemap.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -39,13 +40,11 @@ Vec3 Curve::map_rgb(Vec3 rgb, Apply apply) const {
     case Apply::per_channel:
     case Apply::rgb:
       return {map(c.x), map(c.y), map(c.z)};
-    case Apply::max_rgb: {
-      const double m = std::max({c.x, c.y, c.z});
-      return m > 0 ? c * (map(m) / m) : Vec3{};
-    }
+    case Apply::max_rgb:
     case Apply::luminance: {
-      const double y = color::dot(color::kRec2020Luma, c);
-      return y > 0 ? c * (map(y) / y) : Vec3{};
+      const double k = apply == Apply::max_rgb ? std::max({c.x, c.y, c.z}) : color::dot(color::kRec2020Luma, c);
+      const Vec3 y = k > 0 ? c * (shape(k) / k) : Vec3{};
+      return lifts_black() ? Vec3{lift(y.x), lift(y.y), lift(y.z)} : y;
     }
   }
   return c;
@@ -73,27 +72,54 @@ std::optional<double> bisect_inverse(const Curve& c, double y, double max_y) {
   return 0.5 * (lo + hi);
 }
 
-// A scalar curve from a lambda: map and optional analytic inverse.
+// A scalar curve from a lambda: map, optional analytic inverse, its kinks.
 class LambdaCurve : public Curve {
  public:
   using Fn = std::function<double(double)>;
-  LambdaCurve(double max_y, Fn map, Fn inverse = {}) : max_y_(max_y), map_(std::move(map)), inv_(std::move(inverse)) {}
+  LambdaCurve(double max_y, Fn map, Fn inverse = {}, std::vector<double> kinks = {})
+      : max_y_(max_y), map_(std::move(map)), inv_(std::move(inverse)), kinks_(std::move(kinks)) {}
   double map(double x) const override { return std::clamp(map_(std::max(x, 0.0)), 0.0, max_y_); }
   std::optional<double> inverse(double y) const override {
     if (y < 0 || y >= max_y_) return std::nullopt;
     if (inv_) return inv_(y);
     return bisect_inverse(*this, y, max_y_);
   }
+  std::vector<double> kinks() const override { return kinks_; }
 
  private:
   double max_y_;
   Fn map_, inv_;
+  std::vector<double> kinks_;
 };
 
 template <class... A>
 std::unique_ptr<Curve> make(A&&... a) {
   return std::make_unique<LambdaCurve>(std::forward<A>(a)...);
 }
+
+// BT.2390-10 §5.4 EETF (tonemap_curves.hpp) in paper-white units, split as the report's
+// steps: shape = E1, E2 (Hermite roll-off above KS), E4; lift = E3, the black-level lift.
+class Bt2390Curve : public Curve {
+ public:
+  Bt2390Curve(const detail::Bt2390& e, const Display& d) : e_(e), pw_(d.paper_white_nits), max_y_(d.max_y()) {}
+  double map(double x) const override { return std::clamp(e_.map_nits(std::max(x, 0.0) * pw_) / pw_, 0.0, max_y_); }
+  double shape(double x) const override {
+    return std::clamp(e_.shape_nits(std::max(x, 0.0) * pw_) / pw_, 0.0, max_y_);
+  }
+  bool lifts_black() const override { return e_.black_lift; }
+  double lift(double y) const override { return std::clamp(e_.lift_nits(std::max(y, 0.0) * pw_) / pw_, 0.0, max_y_); }
+  std::optional<double> inverse(double y) const override { return bisect_inverse(*this, y, max_y_); }
+  std::vector<double> kinks() const override { return scaled(e_.kinks_nits()); }
+  std::vector<double> lift_kinks() const override { return scaled(e_.lift_kinks_nits()); }
+
+ private:
+  std::vector<double> scaled(std::vector<double> nits) const {
+    for (double& n : nits) n /= pw_;
+    return nits;
+  }
+  detail::Bt2390 e_;
+  double pw_, max_y_;
+};
 
 // ---- RGB operators ---------------------------------------------------------------------
 
@@ -206,7 +232,7 @@ std::vector<ToneCurveInfo> builtins() {
                "REFERENCE.md §1.3", {}, Apply::per_channel, true, true, true,
                [](const Display& d, const ParamValues&) {
                  const double w = d.max_y();
-                 return make(w, [w](double x) { return std::min(x, w); }, [](double y) { return y; });
+                 return make(w, [w](double x) { return std::min(x, w); }, [](double y) { return y; }, std::vector<double>{w});
                }});
   v.push_back({"pq-shoulder",
                "Linear to a knee halfway (in PQ) between paper white and peak, then an exponential "
@@ -239,7 +265,8 @@ std::vector<ToneCurveInfo> builtins() {
                      [=](double y) {
                        const double t = y / w, b = 1 - t;
                        return w * (-b + std::sqrt(b * b + 4 * t / w2)) * w2 / 2;
-                     });
+                     },
+                     std::vector<double>{param(p, "white")});
                }});
   v.push_back({"drago", "Drago et al. adaptive logarithmic mapping, display-luminance aware",
                "Drago et al., Adaptive Logarithmic Mapping, Eurographics 2003, eq. 4",
@@ -253,7 +280,7 @@ std::vector<ToneCurveInfo> builtins() {
                    x = std::min(x, lmax);
                    // Ld / Ld_max = ln(x + 1) / (log10(Lw_max + 1) ln(2 + 8 (x / Lw_max)^e)): 1 at x = Lw_max.
                    return w * std::log(x + 1) / (std::log10(lmax + 1) * std::log(2 + 8 * std::pow(x / lmax, e)));
-                 });
+                 }, LambdaCurve::Fn{}, std::vector<double>{lmax});
                }});
   v.push_back({"hable", "Hable \"Uncharted 2\" filmic curve (Duiker), normalised by the white point",
                "Hable, Filmic Tonemapping Operators, 2010 (A=.15 B=.50 C=.10 D=.20 E=.02 F=.30, W=11.2)",
@@ -264,7 +291,8 @@ std::vector<ToneCurveInfo> builtins() {
                  const double w = d.max_y(), white = param(p, "white"), bias = param(p, "exposure_bias");
                  const Hable h;
                  const double norm = h.raw(white);
-                 return make(w, [=](double x) { return w * std::min(h.raw(std::min(bias * x / w, white)) / norm, 1.0); });
+                 return make(w, [=](double x) { return w * std::min(h.raw(std::min(bias * x / w, white)) / norm, 1.0); },
+                             LambdaCurve::Fn{}, std::vector<double>{white * w / bias});
                }});
   v.push_back({"hable-piecewise", "Hable's piecewise power curve (toe, linear section, shoulder)",
                "Hable, Filmic Tonemapping with Piecewise Power Curves, 2017",
@@ -280,7 +308,9 @@ std::vector<ToneCurveInfo> builtins() {
                  auto c = std::make_shared<detail::HablePiecewise>(
                      param(p, "toe_strength"), param(p, "toe_length"), param(p, "shoulder_strength"),
                      param(p, "shoulder_length"), param(p, "shoulder_angle"), param(p, "gamma"));
-                 return make(w, [=](double x) { return w * c->eval(x / w); });
+                 std::vector<double> kinks = c->kinks();
+                 for (double& k : kinks) k *= w;
+                 return make(w, [=](double x) { return w * c->eval(x / w); }, LambdaCurve::Fn{}, std::move(kinks));
                }});
   v.push_back({"day", "Day's user-friendly operator (Insomniac): rational toe and shoulder",
                "Day, An efficient and user-friendly tone mapping operator, Insomniac Games 2012",
@@ -294,7 +324,9 @@ std::vector<ToneCurveInfo> builtins() {
                  const double w = d.max_y();
                  auto c = std::make_shared<detail::Day>(param(p, "black"), param(p, "white"), param(p, "crossover"),
                                                         param(p, "toe"), param(p, "shoulder"));
-                 return make(w, [=](double x) { return w * c->eval(x / w); });
+                 std::vector<double> kinks = c->kinks();
+                 for (double& k : kinks) k *= w;
+                 return make(w, [=](double x) { return w * c->eval(x / w); }, LambdaCurve::Fn{}, std::move(kinks));
                }});
   v.push_back({"lottes", "Lottes' contrast/shoulder curve, SDR parameters, stretched to the display maximum",
                "Lottes, Advanced Techniques and Optimization of HDR Color Pipelines, GDC 2016",
@@ -308,7 +340,8 @@ std::vector<ToneCurveInfo> builtins() {
                  const double w = d.max_y(), hdr_max = param(p, "hdr_max");
                  auto l = std::make_shared<detail::Lottes>(param(p, "contrast"), param(p, "shoulder"), hdr_max,
                                                            param(p, "mid_in"), param(p, "mid_out"));
-                 return make(w, [=](double x) { return w * std::min(l->eval(std::min(x / w, hdr_max)), 1.0); });
+                 return make(w, [=](double x) { return w * std::min(l->eval(std::min(x / w, hdr_max)), 1.0); },
+                             LambdaCurve::Fn{}, std::vector<double>{w * hdr_max});
                }});
   v.push_back({"lottes-hdr", "Lottes' curve in display units: mid grey lands at mid_out paper whites, "
                              "hdr_max reaches the peak",
@@ -324,7 +357,8 @@ std::vector<ToneCurveInfo> builtins() {
                  const double mid_out = std::min(param(p, "mid_out") / w, 0.9);
                  auto l = std::make_shared<detail::Lottes>(param(p, "contrast"), param(p, "shoulder"), hdr_max,
                                                            param(p, "mid_in"), mid_out);
-                 return make(w, [=](double x) { return w * std::min(l->eval(std::min(x, hdr_max)), 1.0); });
+                 return make(w, [=](double x) { return w * std::min(l->eval(std::min(x, hdr_max)), 1.0); },
+                             LambdaCurve::Fn{}, std::vector<double>{hdr_max});
                }});
   v.push_back({"aces-narkowicz", "Narkowicz's fit of the ACES RRT+ODT (SDR), stretched to the display maximum",
                "Narkowicz, ACES Filmic Tone Mapping Curve, 2015",
@@ -337,8 +371,11 @@ std::vector<ToneCurveInfo> builtins() {
                    const double a = 2.43 * y - 2.51, b = 0.59 * y - 0.03, c = 0.14 * y;
                    return (-b - std::sqrt(b * b - 4 * a * c)) / (2 * a);
                  };
+                 // f reaches 1 (then clipped) where 0.08 u^2 - 0.56 u - 0.14 = 0.
+                 const double qa = 2.51 - 2.43, qb = 0.03 - 0.59, qc = -0.14;
+                 const double u1 = (-qb + std::sqrt(qb * qb - 4 * qa * qc)) / (2 * qa);
                  return make(w, [=](double x) { return w * std::min(f(s * x / w), 1.0); },
-                             [=](double y) { return finv(y / w) * w / s; });
+                             [=](double y) { return finv(y / w) * w / s; }, std::vector<double>{u1 * w / s});
                }});
   v.push_back({"aces-narkowicz-hdr", "Narkowicz's HDR (1000 cd/m2) fit of ACES, normalised to the display maximum",
                "Narkowicz, HDR Display - First Steps, 2016 (a=15.8 b=2.12 c=1.2 d=5.92 e=1.9)",
@@ -353,13 +390,13 @@ std::vector<ToneCurveInfo> builtins() {
                "ITU-R BT.2390-10 §5.4",
                {{"source_peak_nits", "mastering (source) peak", 100, 10000, 1000},
                 {"source_black_nits", "mastering (source) black", 0, 1, 0},
-                {"black_lift", "1: apply the EETF's black-level lift (lifts black!)", 0, 1, 0}},
+                {"black_lift", "1: the report's black-level lift E3: the source black lands on the display black "
+                               "(lifts black!); 0: no lift, light below the source black passes unchanged", 0, 1, 0}},
                Apply::max_rgb, true, true, true,
-               [](const Display& d, const ParamValues& p) {
-                 auto e = std::make_shared<detail::Bt2390>(param(p, "source_black_nits"), param(p, "source_peak_nits"),
-                                                           d.black_nits, d.peak_nits, param(p, "black_lift") >= 0.5);
-                 const double pw = d.paper_white_nits;
-                 return make(d.max_y(), [=](double x) { return e->map_nits(x * pw) / pw; });
+               [](const Display& d, const ParamValues& p) -> std::unique_ptr<Curve> {
+                 const detail::Bt2390 e(param(p, "source_black_nits"), param(p, "source_peak_nits"), d.black_nits,
+                                        d.peak_nits, param(p, "black_lift") >= 0.5);
+                 return std::make_unique<Bt2390Curve>(e, d);
                }});
   v.push_back({"pbr-neutral", "Khronos PBR Neutral: keeps base colours up to a start of compression, then "
                               "desaturates highlights",
@@ -460,6 +497,66 @@ Result<std::unique_ptr<Curve>> prepare(std::string_view name, const Display& dis
   auto resolved = resolve_params(*info, params);
   if (!resolved) return resolved.error();
   return info->prepare(display, *resolved);
+}
+
+namespace {
+// Where the parabolas through (x[i], y[i]) for i in `l` and in `r` meet between lo and hi
+// (Lagrange form, solved as a quadratic), or NaN.
+double meet(const std::vector<double>& x, const std::vector<double>& y, std::array<std::size_t, 3> l,
+            std::array<std::size_t, 3> r, double lo, double hi) {
+  // Each parabola as c0 + c1 t + c2 t^2 in t = x - lo (well conditioned near the kink).
+  auto fit = [&](std::array<std::size_t, 3> i) {
+    const double t0 = x[i[0]] - lo, t1 = x[i[1]] - lo, t2 = x[i[2]] - lo;
+    const double d01 = (y[i[1]] - y[i[0]]) / (t1 - t0), d12 = (y[i[2]] - y[i[1]]) / (t2 - t1);
+    const double c2 = (d12 - d01) / (t2 - t0), c1 = d01 - c2 * (t0 + t1), c0 = y[i[0]] - c1 * t0 - c2 * t0 * t0;
+    return std::array<double, 3>{c0, c1, c2};
+  };
+  const auto a = fit(l), b = fit(r);
+  const double q2 = a[2] - b[2], q1 = a[1] - b[1], q0 = a[0] - b[0], span = hi - lo;
+  auto inside = [&](double t) { return t >= 0 && t <= span; };
+  if (std::abs(q2) * span < 1e-12 * std::abs(q1)) {
+    const double t = -q0 / q1;
+    return q1 != 0 && inside(t) ? lo + t : std::nan("");
+  }
+  const double disc = q1 * q1 - 4 * q2 * q0;
+  if (disc < 0) return std::nan("");
+  const double sq = std::sqrt(disc), t1 = (-q1 + sq) / (2 * q2), t2 = (-q1 - sq) / (2 * q2);
+  if (inside(t1) && (!inside(t2) || std::abs(t1 - 0.5 * span) < std::abs(t2 - 0.5 * span))) return lo + t1;
+  return inside(t2) ? lo + t2 : std::nan("");
+}
+}  // namespace
+
+std::vector<double> find_kinks(const std::function<double(double)>& f, double lo, double hi) {
+  constexpr int kPerOctave = 1024;
+  const int n = static_cast<int>(std::ceil(std::log2(hi / lo) * kPerOctave));
+  std::vector<double> x(static_cast<std::size_t>(n) + 1), y(x.size()), slope(static_cast<std::size_t>(n));
+  for (int i = 0; i <= n; ++i) {
+    x[static_cast<std::size_t>(i)] = lo * std::exp2(static_cast<double>(i) / kPerOctave);
+    y[static_cast<std::size_t>(i)] = f(x[static_cast<std::size_t>(i)]);
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    slope[u] = (y[u + 1] - y[u]) / (x[u + 1] - x[u]);
+  }
+  // d(i) = |slope[i + 1] - slope[i]|: a kink inside interval k shows in d(k - 1) and d(k), so
+  // the first j whose max(d(j - 1), d(j)) stands out is k - 1 or k; samples j - 2 .. j lie left
+  // of the kink and j + 2 .. j + 4 right of it.
+  auto d = [&](int i) { return std::abs(slope[static_cast<std::size_t>(i + 1)] - slope[static_cast<std::size_t>(i)]); };
+  std::vector<double> kinks;
+  for (int j = 4; j + 5 < n; ++j) {
+    const auto u = static_cast<std::size_t>(j);
+    const double here = std::max(d(j - 1), d(j));
+    const double around = std::max(d(j - 3), d(j + 2));
+    // A jump that moves the function by at least 1e-6 of its value over one unit of x:
+    // smaller ones cannot move a table lookup by a 16-bit step (nor can a curve that has
+    // saturated to its maximum in the last bits of a double).
+    if (!(here > 50 * around && here * x[u] > 1e-6 * std::abs(y[u]))) continue;
+    const double xk = meet(x, y, {u - 2, u - 1, u}, {u + 2, u + 3, u + 4}, x[u - 1], x[u + 2]);
+    const double at = std::isnan(xk) ? 0.5 * (x[u] + x[u + 1]) : xk;
+    if (kinks.empty() || at > kinks.back() * (1 + 1e-6)) kinks.push_back(at);
+    j += 4;
+  }
+  return kinks;
 }
 
 std::string_view default_curve(Mode) { return "pq-shoulder"; }

@@ -3,9 +3,11 @@
 // exists, an inverse. Curves are peak-aware: they map a relative scene value x (1.0 =
 // diffuse white) to display luminance y in units of paper white, y in [0, peak/paper_white].
 // nits = y * paper_white_nits. No curve lifts black (the display's black level is the
-// encoder's business); BT.2390's black lift is an opt-in parameter.
+// encoder's business), with one opt-in exception: bt2390 with black_lift = 1 maps the
+// source black to the display black, exactly as BT.2390 §5.4 step E3 does.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -55,8 +57,25 @@ class Curve {
   // x = f^-1(y) where the curve is invertible on [0, max_y); nullopt otherwise.
   virtual std::optional<double> inverse(double y) const { return std::nullopt; }
   // RGB operator (relative Rec.2020 in, paper-white units Rec.2020 out). The default
-  // applies the scalar map according to `apply`.
+  // applies the scalar map according to `apply`: per channel, or the ratio shape(k) / k of
+  // k = max(RGB) or luminance on every channel, then lift() per channel.
   virtual color::Vec3 map_rgb(color::Vec3 rgb, Apply apply) const;
+
+  // Where map's slope jumps (a clamp at the white point, a segment join that is not C1, the
+  // source peak of bt2390), in relative scene units: the fast path's tables put a node on
+  // each (encode/kernel/float_lut.hpp). tests/encode/tone finds kinks numerically and checks
+  // the tables at and around every one, declared or not.
+  virtual std::vector<double> kinks() const { return {}; }
+
+  // A curve whose last step is a per-channel black-level lift (bt2390 with black_lift:
+  // BT.2390 §5.4 step E3) is map(x) = lift(shape(x)); ratio applications take the ratio of
+  // the shape and lift each channel after it, as the report lifts each of R', G', B' (black,
+  // and the zero channels of near-black colours, get the display's black). lift_kinks()
+  // are lift's kinks in paper-white units.
+  virtual bool lifts_black() const { return false; }
+  virtual double shape(double x) const { return map(x); }
+  virtual double lift(double y) const { return y; }
+  virtual std::vector<double> lift_kinks() const { return {}; }
 };
 
 struct ToneCurveInfo {
@@ -86,6 +105,13 @@ Result<ParamValues> resolve_params(const ToneCurveInfo& info, const ParamValues&
 // Prepares a curve by name for a display, with validated parameters.
 Result<std::unique_ptr<Curve>> prepare(std::string_view name, const Display& display,
                                        const ParamValues& params = {});
+
+// Where f's slope jumps on [lo, hi] (lo > 0), found numerically: for checks (tests and
+// `hdrd selftest` compare the fast path's tables at and around each kink, declared by the
+// curve or not). f is sampled 1024 times per octave; an interval whose slope change is 50
+// times that of the intervals two away on both sides is a kink (a C1 join with a jump in
+// curvature is not), placed where the lines through the samples on either side meet.
+std::vector<double> find_kinks(const std::function<double(double)>& f, double lo, double hi);
 
 // The default curve of each mode (documented in docs/tone-mapping.md): keeps reference
 // white whenever peak >= 2 x paper white.

@@ -131,7 +131,7 @@ double PqShoulder::inverse_nits(double nits) const {
 
 Bt2390::Bt2390(double src_black_nits, double src_peak_nits, double dst_black_nits, double dst_peak_nits,
                bool lift)
-    : black_lift(lift) {
+    : black_lift(lift), dst_peak_nits(dst_peak_nits) {
   e_src_black = transfer::pq_inverse_eotf(src_black_nits);
   e_src_white = transfer::pq_inverse_eotf(src_peak_nits);
   const double range = e_src_white - e_src_black;
@@ -140,21 +140,57 @@ Bt2390::Bt2390(double src_black_nits, double src_peak_nits, double dst_black_nit
   ks = 1.5 * max_lum - 0.5;
 }
 
-double Bt2390::map_nits(double nits) const {
+double Bt2390::shape_nits(double nits) const {
   const double range = e_src_white - e_src_black;
-  const double e1 = std::clamp((transfer::pq_inverse_eotf(nits) - e_src_black) / range, 0.0, 1.0);
-  double e2 = e1;
-  if (e1 >= ks && ks < 1.0) {
-    // BT.2390 eq. (5.4-2): Hermite spline from (KS, KS) with slope 1 to (1, maxLum) with slope 0.
-    const double t = (e1 - ks) / (1.0 - ks);
-    const double t2 = t * t, t3 = t2 * t;
-    e2 = (2 * t3 - 3 * t2 + 1) * ks + (t3 - 2 * t2 + t) * (1 - ks) + (-2 * t3 + 3 * t2) * max_lum;
+  const double e1 = (transfer::pq_inverse_eotf(nits) - e_src_black) / range;
+  if (e1 < 0) return black_lift ? transfer::pq_eotf(e_src_black) : std::max(nits, 0.0);
+  if (e1 < ks || ks >= 1.0) return e1 < 1.0 ? nits : transfer::pq_eotf(e_src_white);
+  // BT.2390 eq. (5.4-2): Hermite spline from (KS, KS) with slope 1 to (1, maxLum) with slope 0.
+  const double t = (std::min(e1, 1.0) - ks) / (1.0 - ks);
+  const double t2 = t * t, t3 = t2 * t;
+  const double e2 = (2 * t3 - 3 * t2 + 1) * ks + (t3 - 2 * t2 + t) * (1 - ks) + (-2 * t3 + 3 * t2) * max_lum;
+  return transfer::pq_eotf(e2 * range + e_src_black);
+}
+
+double Bt2390::lift_nits(double nits) const {
+  const double range = e_src_white - e_src_black;
+  const double e2 = std::clamp((transfer::pq_inverse_eotf(nits) - e_src_black) / range, 0.0, 1.0);
+  const double e3 = e2 + min_lum * std::pow(1.0 - e2, 4.0);
+  return transfer::pq_eotf(e3 * range + e_src_black);
+}
+
+double Bt2390::lift_reaches_peak_nits() const {
+  if (!black_lift) return 0;
+  // The largest light the roll-off gives: the display peak below the corner, else the source peak.
+  double hi = shape_nits(transfer::kPqPeakNits), lo = transfer::pq_eotf(e_src_black);
+  if (!(lift_nits(hi) > dst_peak_nits)) return 0;
+  for (int i = 0; i < 200 && hi - lo > 1e-13 * hi; ++i) {  // lift is increasing (b < 1/4)
+    const double mid = 0.5 * (lo + hi);
+    (lift_nits(mid) > dst_peak_nits ? hi : lo) = mid;
   }
-  if (black_lift) e2 += min_lum * std::pow(1.0 - e2, 4.0);
-  const double e4 = e2 * range + e_src_black;
-  const double out = transfer::pq_eotf(e4);
-  // Without the black lift the curve must not lift black: PQ(0) decodes to 0 exactly.
-  return (!black_lift && nits <= 0) ? 0.0 : out;
+  return 0.5 * (lo + hi);
+}
+
+std::vector<double> Bt2390::kinks_nits() const {
+  const double range = e_src_white - e_src_black;
+  std::vector<double> k = {transfer::pq_eotf(e_src_black), transfer::pq_eotf(e_src_white)};
+  if (ks < 1.0) k.push_back(transfer::pq_eotf(ks * range + e_src_black));
+  if (const double n = lift_reaches_peak_nits(); n > 0) {
+    // The input whose roll-off gives n (shape is increasing up to the source peak).
+    double lo = 0, hi = transfer::pq_eotf(e_src_white);
+    for (int i = 0; i < 200 && hi - lo > 1e-13 * hi; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (shape_nits(mid) < n ? lo : hi) = mid;
+    }
+    k.push_back(0.5 * (lo + hi));
+  }
+  return k;
+}
+
+std::vector<double> Bt2390::lift_kinks_nits() const {
+  std::vector<double> k = {transfer::pq_eotf(e_src_black), transfer::pq_eotf(e_src_white)};
+  if (const double n = lift_reaches_peak_nits(); n > 0) k.push_back(n);
+  return k;
 }
 
 }  // namespace hdrd::tonemap::detail

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 namespace hdrd::tonemap::detail {
 
@@ -26,6 +27,7 @@ class HablePiecewise {
                  double shoulder_length, double shoulder_angle, double gamma);
   double eval(double x) const;  // x in scene units; 1 at white point
   double white_point() const { return w_; }
+  std::vector<double> kinks() const { return {w_ * x0_, w_ * x1_, w_}; }  // segment joins, white point
 
  private:
   struct Segment {
@@ -55,6 +57,7 @@ struct Day {
   Day(double black_point, double white_point, double crossover_point, double toe_strength,
       double shoulder_strength);
   double eval(double x) const;
+  std::vector<double> kinks() const { return {black, crossover, white}; }
 };
 
 // Exponential shoulder in the PQ domain: identity up to a knee, then
@@ -69,13 +72,33 @@ struct PqShoulder {
   double inverse_nits(double nits) const;
 };
 
-// BT.2390-10 §5.4 EETF in the PQ domain (Hermite spline above the knee, optional black lift).
+// BT.2390-10 §5.4 EETF in the PQ domain, with LB, LW the source (mastering) black and
+// peak and Lmin, Lmax the display's:
+//   E1 = (PQ(n) - PQ(LB)) / (PQ(LW) - PQ(LB)), minLum, maxLum likewise of Lmin, Lmax,
+//   E2 = E1 below KS = 1.5 maxLum - 0.5, the Hermite spline P[E1] from KS to 1,
+//   E3 = E2 + b (1 - E2)^4 with b = minLum (the black-level lift),
+//   E4 = E3 (PQ(LW) - PQ(LB)) + PQ(LB), out = PQ^-1(E4).
+// shape_nits is the EETF without E3, lift_nits is E3 alone (on a shape value), map_nits both
+// when black_lift is on. E1 is clipped to [0, 1] (light above the source peak is the source
+// peak), except below the source black without the lift: there the EETF is the identity
+// E2 = E1 extended below 0, so no light is lifted (with the lift, the source black and what
+// is below it land on the display black, as the report maps them).
+// E3 lifts the top too (E2 = maxLum gives maxLum + b (1 - maxLum)^4): the curve clips the
+// output at the display peak, and that clip is a kink of its own.
 struct Bt2390 {
   double e_src_black, e_src_white, min_lum, max_lum, ks;
   bool black_lift;
+  double dst_peak_nits = 0;
   Bt2390(double src_black_nits, double src_peak_nits, double dst_black_nits, double dst_peak_nits,
          bool black_lift);
-  double map_nits(double nits) const;
+  double shape_nits(double nits) const;
+  double lift_nits(double nits) const;
+  double map_nits(double nits) const { return black_lift ? lift_nits(shape_nits(nits)) : shape_nits(nits); }
+  // Where the slopes jump: the source black and peak (the clips of E1), KS, and with the
+  // lift where its output reaches the display peak (input light, and lift input light).
+  std::vector<double> kinks_nits() const;
+  std::vector<double> lift_kinks_nits() const;
+  double lift_reaches_peak_nits() const;  // the shape light whose lift is the display peak, or 0
 };
 
 }  // namespace hdrd::tonemap::detail

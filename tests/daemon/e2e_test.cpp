@@ -166,8 +166,9 @@ TEST(DaemonE2E, GetEndpoints) {
   EXPECT_GT(j["limits"]["max_width"].get<int>(), 0);
   std::set<std::string> patterns;
   for (const auto& p : j["patterns"]) patterns.insert(p["name"]);
-  EXPECT_EQ(patterns, (std::set<std::string>{"bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey"}))
-      << "issue 7's patterns";
+  EXPECT_EQ(patterns, (std::set<std::string>{"bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey",
+                                             "sdr-shadows"}))
+      << "issue 7's patterns and issue 15's sdr-shadows";
 
   auto disp = get(c, "/v1/displays");
   ASSERT_EQ(disp.status, 200) << disp.body;
@@ -916,7 +917,7 @@ TEST(DaemonE2E, HdrctlAndPythonClient) {
   EXPECT_EQ(png_header(read_file(bars)).cicp, std::string("\x09\x12\x00\x00", 4)) << "HLG, narrow range";
   r = run_command(hdrctl + " pattern --list --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(json::parse(r.out).size(), 6u);
+  EXPECT_EQ(json::parse(r.out).size(), 7u) << "issue 7's six patterns and issue 15's sdr-shadows";
   r = run_command(hdrctl + " pattern bt2111 --mode sdr -o " + (d.dir() / "no.png").string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("display.mode"), std::string::npos) << r.err;

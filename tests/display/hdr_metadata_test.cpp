@@ -3,12 +3,15 @@
 // and the layout against libdrm's own struct hdr_output_metadata.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 
 #include <drm_mode.h>
 
 #include "display/hdr_metadata.hpp"
+#include "encode/io/io.hpp"
+#include "encode/pipeline.hpp"
 
 namespace hdrd::display {
 namespace {
@@ -112,6 +115,48 @@ TEST(HdrOutputMetadata, ColorspaceAndKernelConstants) {
   EXPECT_EQ(colorspace_name(Mode::sdr), "Default");
   EXPECT_EQ(DRM_MODE_COLORIMETRY_BT2020_RGB, 9);  // include/drm/drm_connector.h
   EXPECT_EQ(HDMI_STATIC_METADATA_TYPE1, 0);       // include/linux/hdmi.h
+}
+
+
+// One rule for MaxCLL / MaxFALL (encode/frame.hpp, REFERENCE.md §6), carried identically by
+// the sidecar, the PNG cLLI and HDR_OUTPUT_METADATA: a black frame carries the mastering
+// peak (CTA-861.3 reads 0 as "unknown"), a lit one its measured values rounded up.
+TEST(ContentLightEverywhere, BlackAndLitFramesCarryTheSameValuesInEveryContainer) {
+  for (Mode mode : {Mode::hdr10, Mode::hlg})
+    for (double level : {0.0, 0.37, 4.2}) {
+      Image img(8, 4);
+      for (std::size_t i = 0; i < img.pixel_count(); ++i)
+        img.rgba[i * 4] = img.rgba[i * 4 + 1] = img.rgba[i * 4 + 2] = float(level * (i % 3)), img.rgba[i * 4 + 3] = 1;
+      EncodeSettings s;
+      s.target = default_target(mode);
+      s.tone.curve = "clip";
+      SceneInput in;
+      in.image = &img;
+      auto f = encode_frame(in, s);
+      ASSERT_TRUE(f.ok());
+      const auto sidecar = io::sidecar_json(*f, {});
+      const int cll = sidecar["content_light_level"]["max_cll_nits"], fall = sidecar["content_light_level"]["max_fall_nits"];
+      if (level == 0) {
+        EXPECT_EQ(f->content_light.max_cll_nits, 0.0);
+        EXPECT_EQ(cll, 1000) << "a black frame carries the mastering peak";
+        EXPECT_EQ(fall, 1000);
+      } else {
+        EXPECT_EQ(cll, static_cast<int>(std::ceil(f->content_light.max_cll_nits - 1e-6)));
+        EXPECT_EQ(fall, static_cast<int>(std::ceil(f->content_light.max_fall_nits - 1e-6)));
+      }
+      auto png = io::encode_png(*f);
+      ASSERT_TRUE(png.ok());
+      auto info = io::read_png_info_memory(*png);
+      ASSERT_TRUE(info.ok() && info->clli);
+      const auto& c = *info->clli;
+      EXPECT_EQ((c[0] << 24 | c[1] << 16 | c[2] << 8 | c[3]), cll * 10000) << to_string(mode) << " " << level;
+      EXPECT_EQ((c[4] << 24 | c[5] << 16 | c[6] << 8 | c[7]), fall * 10000);
+      auto m = make_hdr_output_metadata(mode, f->mastering, f->content_light);
+      ASSERT_TRUE(m.ok());
+      const auto blob = serialize(*m);
+      EXPECT_EQ(blob[26] | (blob[27] << 8), cll);
+      EXPECT_EQ(blob[28] | (blob[29] << 8), fall);
+    }
 }
 
 }  // namespace

@@ -160,6 +160,99 @@ TEST(BrokenEncoder, WindowOffByTwoCodesFails) {
   EXPECT_NE(c.detail.find("codes (670, 670, 670) vs 668"), std::string::npos) << c.detail;
 }
 
+// Issue 15's checks fail on the breakages they exist for.
+TEST(BrokenEncoder, DumpThatIsNotTheDisplayedLightFails) {
+  // A Rec.2020 blue of 800 cd/m2 on a 1000 cd/m2 HLG display: the old encoder sent
+  // (0, 0, 1023) and dumped 800, which BT.2100's EOTF shows at 569.
+  Image img(4, 2);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) img.rgba[i * 4 + 2] = 800, img.rgba[i * 4 + 3] = 1;
+  EncodeSettings s;
+  s.target = default_target(Mode::hlg);
+  s.tone.curve = "clip";
+  s.keep_display_nits = true;
+  SceneInput in;
+  in.image = &img;
+  in.to_working = color::Mat3::identity();
+  in.units = InputUnits::absolute;
+  auto f = encode_frame(in, s);
+  ASSERT_TRUE(f.ok());
+  ASSERT_TRUE(check_display_volume(*f, "blue").passed) << check_display_volume(*f, "blue").detail;
+  for (std::size_t i = 0; i + 4 <= f->data.size(); i += 4) {
+    const std::uint32_t blue = 1023u << 20;  // the old clip: (0, 0, 1023)
+    std::memcpy(f->data.data() + i, &blue, 4);
+  }
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) f->display_nits->rgba[i * 4 + 2] = 800;
+  const Check c = check_display_volume(*f, "blue");
+  EXPECT_FALSE(c.passed);
+  EXPECT_NE(c.detail.find("800.00"), std::string::npos) << c.detail;
+  EXPECT_NE(c.detail.find("568."), std::string::npos) << c.detail;  // what the codes show
+}
+
+TEST(BrokenEncoder, ToneTableOffAtAKinkFails) {
+  const DisplayTarget t = default_target(Mode::hdr10);
+  auto curve = tonemap::prepare("bt2390", {t.peak_nits, t.black_nits, t.paper_white_nits});
+  ASSERT_TRUE(curve.ok());
+  const std::vector<double> xs = {1000 / 203.0 * 0.999, 1000 / 203.0, 1000 / 203.0 * 1.001};
+  Image img(3, 1);
+  for (int i = 0; i < 3; ++i) img.rgba[i * 4] = img.rgba[i * 4 + 1] = img.rgba[i * 4 + 2] = float(xs[i]), img.rgba[i * 4 + 3] = 1;
+  EncodeSettings s;
+  s.target = t;
+  s.tone.curve = "bt2390";
+  SceneInput in;
+  in.image = &img;
+  in.to_working = color::Mat3::identity();
+  auto f = encode_frame(in, s);
+  ASSERT_TRUE(f.ok());
+  const double kinks[] = {1000 / 203.0};
+  ASSERT_TRUE(check_tone_kinks(*f, **curve, xs, "bt2390", kinks).passed) << check_tone_kinks(*f, **curve, xs, "bt2390", kinks).detail;
+  for (auto& v : f->signal16) v = static_cast<std::uint16_t>(v - 11);  // the corner's old error: 11 steps low
+  const Check c = check_tone_kinks(*f, **curve, xs, "bt2390", kinks);
+  EXPECT_FALSE(c.passed);
+  EXPECT_NE(c.detail.find("16-bit steps off"), std::string::npos) << c.detail;
+}
+
+TEST(BrokenEncoder, BlackFrameSayingZeroSomewhereFails) {
+  const EncodedFrame f = encode_uniform(default_target(Mode::hdr10), 0.0);
+  nlohmann::json sidecar = io::sidecar_json(f, {});
+  auto png = io::read_png_info_memory(*io::encode_png(f));
+  ASSERT_TRUE(png.ok());
+  const auto blob = display::serialize(*display::make_hdr_output_metadata(Mode::hdr10, f.mastering, f.content_light));
+  ASSERT_TRUE(check_black_frame_metadata(f, sidecar, &*png, blob).passed)
+      << check_black_frame_metadata(f, sidecar, &*png, blob).detail;
+  sidecar["content_light_level"]["max_cll_nits"] = 0;  // the old sidecar: 0 / 0
+  sidecar["content_light_level"]["max_fall_nits"] = 0;
+  const Check c = check_black_frame_metadata(f, sidecar, &*png, blob);
+  EXPECT_FALSE(c.passed);
+  EXPECT_NE(c.detail.find("sidecar says 0/0, want 1000/1000"), std::string::npos) << c.detail;
+}
+
+TEST(BrokenEncoder, UiDecodedWithTheWrongSdrEotfFails) {
+  const int codes[] = {0, 5, 10, 20, 51, 255};
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 24;
+  overlay->height = 2;
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const float v = codes[x / 4] / 255.0f;
+      overlay->rgba.insert(overlay->rgba.end(), {v, v, v, 1.0f});
+    }
+  EncodeSettings s;
+  s.target = default_target(Mode::hdr10);
+  s.target.sdr_content_eotf = SdrEotf::gamma22;
+  s.tone.curve = "clip";
+  s.ui.overlay = overlay;
+  Image black(24, 2);
+  SceneInput in;
+  in.image = &black;
+  auto f = encode_frame(in, s);
+  ASSERT_TRUE(f.ok());
+  ASSERT_TRUE(check_sdr_content(*f, codes, 203).passed) << check_sdr_content(*f, codes, 203).detail;
+  f->target.sdr_content_eotf = SdrEotf::srgb;  // the frame claims sRGB: the shadows disagree
+  const Check c = check_sdr_content(*f, codes, 203);
+  EXPECT_FALSE(c.passed);
+  EXPECT_EQ(c.name, "sdr-content/srgb");
+}
+
 // The whole suite over a deliberately broken encoder (every code two too high, after an
 // otherwise correct encode): the report fails, and it fails on the checks that measure
 // codes, not on ones that cannot see the frames (the tone curves' monotonicity).
@@ -175,7 +268,8 @@ TEST(BrokenEncoder, WholeSuiteFailsForTheRightChecks) {
   std::map<std::string, const Check*> by_name;
   for (const auto& c : bad.checks) by_name[c.name] = &c;
   for (const char* name : {"paper-white/clip", "window/203", "window/1000", "peak/ramp-clip", "content-light/ramp-clip",
-                           "metadata-blob"}) {
+                           "metadata-blob", "display-volume/clip", "tone-kinks/clip", "tone-kinks/bt2390",
+                           "sdr-content/srgb", "sdr-shadows/rows"}) {
     ASSERT_TRUE(by_name.count(name)) << name;
     EXPECT_FALSE(by_name[name]->passed) << name << ": " << by_name[name]->detail;
   }

@@ -166,6 +166,40 @@ TEST(SdrGrey, WhiteAtSdrWhite) {
   EXPECT_EQ(code_at(*s, 450, 10), 102);
 }
 
+// sdr-shadows: the same SDR shadow signals through sRGB, gamma 2.2 and BT.1886 (2.4), one row
+// each at the SDR white; the codes are PQ of SDR white x EOTF(code / 255), written out here.
+TEST(SdrShadows, RowsAreTheThreeEotfsAtSdrWhite) {
+  DisplayTarget t = default_target(Mode::hdr10);
+  t.sdr_white_nits = 203;
+  t.sdr_content_eotf = SdrEotf::gamma22;
+  const int w = 1200, h = 400;
+  auto f = make_pattern("sdr-shadows", t, small(w, h), false);
+  ASSERT_TRUE(f);
+  const auto& signals = sdr_shadow_signals();
+  ASSERT_EQ(signals.size(), 11u);
+  auto pq = [](double nits) {
+    const double m1 = 2610.0 / 16384, m2 = 2523.0 / 4096 * 128, c1 = 3424.0 / 4096, c2 = 2413.0 / 4096 * 32,
+                 c3 = 2392.0 / 4096 * 32;
+    const double y = std::pow(nits / 10000, m1);
+    return static_cast<int>(std::lround(std::pow((c1 + c2 * y) / (1 + c3 * y), m2) * 1023));
+  };
+  const int label_w = w / 8, row_h = (h - h / 8) / 3, n = 11;
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < n; ++i) {
+      const double v = signals[static_cast<std::size_t>(i)];
+      const double rel = r == 0 ? (v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4))
+                                : std::pow(v, r == 1 ? 2.2 : 2.4);
+      const int x = label_w + (2 * i + 1) * (w - label_w) / (2 * n), y = r * row_h + row_h / 3;
+      EXPECT_NEAR(code_at(*f, x, y), pq(203 * rel), 1) << "row " << r << " signal " << v;
+    }
+  // Code 10 (column 4) in the shadows: sRGB 0.616, gamma 2.2 0.163, BT.1886 0.085 cd/m2.
+  const int x10 = label_w + 9 * (w - label_w) / (2 * n);
+  EXPECT_GT(code_at(*f, x10, row_h / 3), code_at(*f, x10, row_h + row_h / 3));
+  EXPECT_GT(code_at(*f, x10, row_h + row_h / 3), code_at(*f, x10, 2 * row_h + row_h / 3));
+  EXPECT_EQ(f->settings["pattern"]["sdr_content_eotf"], "gamma22");
+  EXPECT_EQ(f->settings["pattern"]["rows"], (nlohmann::json{"srgb", "gamma22", "bt1886"}));
+}
+
 TEST(Font, GlyphsAreDistinctAndSized) {
   EXPECT_NE(std::memcmp(glyph('0'), glyph('8'), kGlyphHeight), 0);
   EXPECT_EQ(std::memcmp(glyph('a'), glyph('A'), kGlyphHeight), 0);

@@ -2,6 +2,7 @@
 // reference/published_vectors.md (colour-science test suites, BT.2408, BT.2100 table 9).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "encode/colour/transfer.hpp"
@@ -79,8 +80,8 @@ TEST(Hlg, ColourSciencePublished) {
   EXPECT_NEAR(hlg_oetf(1.0), 0.999999995536569, 1e-12);
   EXPECT_NEAR(hlg_system_gamma(1000), 1.2, 1e-15);
   EXPECT_NEAR(hlg_system_gamma(2000), 1.326432598178872, 1e-12);
-  EXPECT_NEAR(hlg_system_gamma(4000), 1.452865196357744, 1e-12);
-  EXPECT_NEAR(hlg_system_gamma(10000), 1.62, 1e-12);
+  // (colour-science's gamma_function_HLG_BT2100 keeps 1.2 + 0.42 log10(Lw / 1000) beyond
+  // 2000 cd/m2, 1.4529 at 4000 and 1.62 at 10000; BT.2100 note 5f says otherwise: below.)
   // eotf_BT2100_HLG_1(0.212132034355964), achromatic, Lw = 1000.
   const double s = 0.212132034355964;
   EXPECT_NEAR(hlg_eotf({s, s, s}, 1000).y, 6.476039825649814, 1e-9);
@@ -90,6 +91,54 @@ TEST(Hlg, ColourSciencePublished) {
   EXPECT_NEAR(fd.x, 12.49759413, 1e-6);
   EXPECT_NEAR(fd.y, 49.99037650, 1e-6);
   EXPECT_NEAR(fd.z, 158.94693786, 1e-6);
+}
+
+// BT.2100-2 Table 5 note 5f: 1.2 + 0.42 log10(Lw / 1000) over 400 <= Lw <= 2000 cd/m2, the
+// extended range formula 1.2 x 1.111^log2(Lw / 1000) outside it (BT.2390 §6.2 likewise),
+// both written out here.
+TEST(Hlg, SystemGammaAtAndBeyondTheProductionRange) {
+  auto in_range = [](double lw) { return 1.2 + 0.42 * std::log10(lw / 1000); };
+  auto extended = [](double lw) { return 1.2 * std::pow(1.111, std::log2(lw / 1000)); };
+  EXPECT_DOUBLE_EQ(hlg_system_gamma(1000), 1.2);
+  EXPECT_NEAR(hlg_system_gamma(2000), in_range(2000), 1e-15);
+  EXPECT_NEAR(hlg_system_gamma(400), in_range(400), 1e-15);
+  EXPECT_NEAR(hlg_system_gamma(4000), extended(4000), 1e-15);
+  EXPECT_NEAR(hlg_system_gamma(10000), extended(10000), 1e-15);
+  EXPECT_NEAR(hlg_system_gamma(100), extended(100), 1e-15);
+  // The numbers: 4000 -> 1.2 x 1.111^2 = 1.4811852, 10000 -> 1.7023 (not 1.4529 and 1.62).
+  EXPECT_NEAR(hlg_system_gamma(4000), 1.4811852, 1e-7);
+  EXPECT_NEAR(hlg_system_gamma(10000), 1.70233, 1e-4);
+  EXPECT_NEAR(hlg_system_gamma(2000), 1.32643, 1e-5);
+}
+
+// BT.2100 Table 5 with a black level: F_D = OOTF[OETF^-1[max(0, (1 - beta) E' + beta)]],
+// beta = sqrt(3 (Lb / Lw)^(1 / gamma)). Written out here for grey (F_D = Lw E^gamma) and
+// inverted by hand: E' = (OETF((F_D / Lw)^(1 / gamma)) - beta) / (1 - beta).
+TEST(Hlg, BlackLevelLiftAndItsInverse) {
+  const double a = 0.17883277, b = 1 - 4 * a, c = 0.55991073;  // as BT.2100 Table 5 publishes them
+  auto oetf = [&](double e) { return e <= 1.0 / 12 ? std::sqrt(3 * e) : a * std::log(12 * e - b) + c; };
+  for (double lw : {600.0, 1000.0, 4000.0})
+    for (double lb : {0.0, 0.005, 0.05, 0.5}) {
+      const double g = lw <= 2000 && lw >= 400 ? 1.2 + 0.42 * std::log10(lw / 1000)
+                                               : 1.2 * std::pow(1.111, std::log2(lw / 1000));
+      const double beta = std::sqrt(3 * std::pow(lb / lw, 1 / g));
+      const auto d = HlgDisplay::from_levels(lw, lb);
+      EXPECT_NEAR(d.beta, beta, 1e-15);
+      // E' = 0 shows the black level, E' = 1 the peak.
+      EXPECT_NEAR(hlg_eotf({0, 0, 0}, lw, lb).y, lb, 1e-12 * lw);
+      EXPECT_NEAR(hlg_eotf({1, 1, 1}, lw, lb).y, lw, 1e-5 * lw);
+      for (double nits : {lb, lb * 1.5 + 1e-3, 1.0, 26.0, 203.0, 0.5 * lw, lw}) {
+        const double want = std::clamp((oetf(std::pow(nits / lw, 1 / g)) - beta) / (1 - beta), 0.0, 1.0);
+        EXPECT_NEAR(hlg_inverse_eotf({nits, nits, nits}, lw, lb).y, want, 1e-12) << lw << " " << lb << " " << nits;
+        if (nits >= lb) {
+          EXPECT_NEAR(hlg_eotf({want, want, want}, lw, lb).y, nits, 1e-9 * lw) << nits;
+        }
+      }
+      // Below the black level there is no signal: E' = 0.
+      if (lb > 0) {
+        EXPECT_EQ(hlg_inverse_eotf({lb * 0.5, lb * 0.5, lb * 0.5}, lw, lb).x, 0.0);
+      }
+    }
 }
 
 TEST(Hlg, ReferenceWhiteAt75Percent) {

@@ -101,8 +101,9 @@ TEST(PngWrite, Hdr10ChunksBytesOrderAndCrcs) {
                                            0x3D, 0x13, 0x40, 0x42,     // W 0.3127 -> 15635, 0.3290 -> 16450
                                            0x00, 0x98, 0x96, 0x80,     // 1000 cd/m2 -> 10 000 000
                                            0x00, 0x00, 0x00, 0x32}));  // 0.005 cd/m2 -> 50
-  // cLLI: MaxCLL 1000 -> 10 000 000; MaxFALL 123.45 -> 1 234 500 (0x12D644).
-  EXPECT_EQ(find(cs, "cLLI")->data, (Bytes{0x00, 0x98, 0x96, 0x80, 0x00, 0x12, 0xD6, 0x44}));
+  // cLLI: the whole cd/m2 every container carries (encode/frame.hpp), in 0.0001 cd/m2:
+  // MaxCLL 1000 -> 10 000 000; MaxFALL 123.45 rounds up to 124 -> 1 240 000 (0x12EBC0).
+  EXPECT_EQ(find(cs, "cLLI")->data, (Bytes{0x00, 0x98, 0x96, 0x80, 0x00, 0x12, 0xEB, 0xC0}));
 }
 
 TEST(PngWrite, Hdr10SamplesAreRoundSignalTimes65535) {
@@ -191,6 +192,27 @@ TEST(PngWrite, TenBitSdrHasCicpButNoHdrChunks) {
   }
 }
 
+// The chunk order docs/dump-format.md §3 states, for every mode: libpng writes the colour
+// chunks it knows (gAMA, sRGB, cHRM, in that order) right after IHDR and the unknown chunks
+// (cICP, mDCV, cLLI) after them, all before IDAT, which is what PNG 3rd edition asks of
+// each (before PLTE and IDAT; no order among them).
+TEST(PngWrite, ChunkOrderIsTheDocumentedOne) {
+  using V = std::vector<std::string>;
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(ten_bit_frame(Mode::hdr10, 2, 2)))),
+            (V{"IHDR", "cICP", "mDCV", "cLLI", "IDAT", "IEND"}));
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(ten_bit_frame(Mode::hlg, 2, 2)))),
+            (V{"IHDR", "cICP", "mDCV", "cLLI", "IDAT", "IEND"}));
+  EncodedFrame srgb = ten_bit_frame(Mode::sdr, 2, 2);
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(srgb))), (V{"IHDR", "gAMA", "sRGB", "cHRM", "cICP", "IDAT", "IEND"}));
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(eight_bit_frame(2, 2)))),
+            (V{"IHDR", "gAMA", "sRGB", "cHRM", "cICP", "IDAT", "IEND"}));
+  EncodedFrame g22 = ten_bit_frame(Mode::sdr, 2, 2);
+  g22.target.sdr_curve = SdrCurve::gamma22;
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(g22))), (V{"IHDR", "gAMA", "cHRM", "cICP", "IDAT", "IEND"}));
+  EXPECT_EQ(types(pngtest::chunks_of(*encode_png(ten_bit_frame(Mode::sdr_bt1886, 2, 2)))),
+            (V{"IHDR", "gAMA", "cHRM", "cICP", "IDAT", "IEND"}));
+}
+
 TEST(PngWrite, EightBitSdrFromXrgb8888) {
   const EncodedFrame f = eight_bit_frame(5, 4);
   const auto png = encode_png(f);
@@ -232,8 +254,9 @@ TEST(PngWrite, ClliRoundsUpAndMdcvRounds) {
   f.mastering.max_nits = 4000;
   f.mastering.min_nits = 0.0001;
   const auto cs = pngtest::chunks_of(*encode_png(f));
-  // 1 000 000.1 units -> 1 000 001 (0xF4241); 0.4 units -> 1.
-  EXPECT_EQ(find(cs, "cLLI")->data, (Bytes{0x00, 0x0F, 0x42, 0x41, 0, 0, 0, 1}));
+  // Whole cd/m2 rounded up, as the sidecar and HDR_OUTPUT_METADATA carry them: 100.00001 ->
+  // 101 (1 010 000 = 0xF6950), 0.00004 -> 1 (10 000 = 0x2710), never 0 ("unknown").
+  EXPECT_EQ(find(cs, "cLLI")->data, (Bytes{0x00, 0x0F, 0x69, 0x50, 0x00, 0x00, 0x27, 0x10}));
   const Bytes& m = find(cs, "mDCV")->data;
   EXPECT_EQ(pngtest::be32(&m[0]) >> 16, 35400u);  // 0.708 / 0.00002
   EXPECT_EQ(pngtest::be32(&m[16]), 40000000u);    // 4000 cd/m2

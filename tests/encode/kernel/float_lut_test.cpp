@@ -168,3 +168,50 @@ TEST(FloatBitsLut, FlatBelowIsExactlyWhereTheTableIsFlat) {
 }
 
 }  // namespace
+
+namespace {
+
+// A kink inside a bucket (a clip at 1000, a slope change) is a node of its own: the lookup
+// follows each side exactly, where plain interpolation across the bucket misses by up to a
+// quarter of the slope jump times the bucket width.
+TEST(FloatBitsLutKinks, KinksInsideABucketAreNodes) {
+  // 1003 (1000 itself is a node: 1.953125 x 2^9 has no bits below the bucket index).
+  auto clip = [](double x) { return std::min(x, 1003.0); };
+  const double kinks[] = {1003.0};
+  const FloatBitsLut plain(clip, -20, 14), patched(clip, -20, 14, kinks);
+  ASSERT_EQ(patched.patches().size(), 1u);
+  double worst_plain = 0, worst_patched = 0;
+  for (int j = -3000; j <= 3000; ++j) {
+    const float v = static_cast<float>(1003.0 * (1 + 2e-6 * j));
+    worst_plain = std::max(worst_plain, std::abs(plain(v) - clip(v)));
+    worst_patched = std::max(worst_patched, std::abs(patched(v) - clip(v)));
+  }
+  EXPECT_GT(worst_plain, 0.5);        // the old corner error: ~1.4 below the clip
+  EXPECT_LT(worst_patched, 1000 * 1e-6);
+  // Two kinks in one bucket (1 / 128 octave is 5.4 wide at 1000), and one on a node.
+  auto two = [](double x) { return x < 1000.5 ? x : (x < 1002.0 ? 1000.5 + 0.5 * (x - 1000.5) : 1001.25); };
+  const double two_kinks[] = {1000.5, 1002.0, 1024.0};
+  const FloatBitsLut both(two, -20, 14, two_kinks);
+  EXPECT_EQ(both.patches().size(), 2u);  // 1024 is a node already
+  for (int j = -4000; j <= 4000; ++j) {
+    const float v = static_cast<float>(1001.0 * (1 + 2e-6 * j));
+    ASSERT_NEAR(both(v), two(v), 1001 * 1e-6) << v;
+  }
+  // Far from the kink the table is what it was.
+  for (float v : {0.5f, 10.0f, 200.0f, 4000.0f}) EXPECT_EQ(patched(v), plain(v)) << v;
+}
+
+TEST(FloatBitsLutKinks, FlatRunEndsAtAPatchedBucket) {
+  // Flat (1) at every node, with a bump inside the bucket [3.09375, 3.109375): the table's
+  // values alone would call everything below 2^10 flat.
+  auto bump = [](double x) { return 1.0 + std::max(0.0, 0.004 - std::abs(x - 3.1)); };
+  const double kinks[] = {3.096, 3.1, 3.104};
+  const FloatBitsLut l(bump, -10, 10, kinks);
+  EXPECT_EQ(l.patches().size(), 3u);
+  ASSERT_GT(l.flat_below(), 0.0f);
+  EXPECT_LE(l.flat_below(), 3.09375f);
+  EXPECT_NEAR(l(3.1f), 1.004f, 1e-6);
+  EXPECT_NEAR(l(3.098f), 1.002f, 1e-6);
+}
+
+}  // namespace

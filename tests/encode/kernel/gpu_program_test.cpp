@@ -7,10 +7,13 @@ using namespace hdrd;
 
 namespace {
 
-PreparedPipeline prepare(Mode m, const std::string& curve, Image& img) {
+PreparedPipeline prepare(Mode m, const std::string& curve, Image& img, const tonemap::ParamValues& params = {},
+                         GamutMapping gamut = GamutMapping::ictcp) {
   EncodeSettings s;
   s.target = default_target(m);
   s.tone.curve = curve;
+  s.tone.params = params;
+  s.gamut = gamut;
   SceneInput in;
   in.image = &img;
   return prepare_pipeline(in, s).value();
@@ -49,6 +52,28 @@ TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
     EXPECT_FALSE(prog.supported) << c;
     EXPECT_NE(prog.unsupported_reason.find("luminance"), std::string::npos) << prog.unsupported_reason;
   }
+}
+
+// The program carries what the CPU tables carry: each kink's patch (with the CPU's own
+// constants), the per-channel offset-ratio form, BT.2390's black lift table, and the HLG
+// volume fit (only with ictcp gamut mapping; clip clips E per channel). tests/shading runs
+// these on llvmpipe against the CPU encoder.
+TEST(GpuProgram, KinksBlackLiftAndHlgVolumeAreInTheProgram) {
+  Image img(2, 2);
+  const auto corner = gpu::make_encode_program(prepare(Mode::hdr10, "bt2390", img));  // source 1000 on 1000
+  ASSERT_TRUE(corner.supported) << corner.unsupported_reason;
+  EXPECT_NE(corner.glsl.find("if (i == "), std::string::npos) << "the corner's patch";
+  const auto lift = gpu::make_encode_program(prepare(Mode::hdr10, "bt2390", img, {{"black_lift", 1}}));
+  ASSERT_TRUE(lift.supported);
+  EXPECT_EQ(lift.tables.size(), 3u);
+  EXPECT_NE(lift.glsl.find("hdrd_lift(nits.r)"), std::string::npos);
+  EXPECT_GT(lift.uniforms.lift_zero, 0.0f);
+  const auto per_channel = gpu::make_encode_program(prepare(Mode::hdr10, "hable", img));
+  EXPECT_NE(per_channel.glsl.find("hdrd_u.toes.x + w * hdrd_u.toes.y"), std::string::npos);
+  const auto hlg = gpu::make_encode_program(prepare(Mode::hlg, "pq-shoulder", img));
+  EXPECT_NE(hlg.glsl.find("float room = 1.0 / kk - yd"), std::string::npos);
+  const auto hlg_clip = gpu::make_encode_program(prepare(Mode::hlg, "pq-shoulder", img, {}, GamutMapping::clip));
+  EXPECT_EQ(hlg_clip.glsl.find("float room"), std::string::npos);
 }
 
 TEST(GpuProgram, ReadbackBuildsTheFrameAndMeasuresLight) {

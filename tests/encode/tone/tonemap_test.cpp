@@ -3,9 +3,12 @@
 // peak, inverses round-trip, reference white kept where the curve claims it).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <ostream>
 
 #include "encode/tone/tonemap.hpp"
+#include "tests/testing/standards.hpp"
 
 using namespace hdrd::tonemap;
 
@@ -37,6 +40,83 @@ TEST(ToneCurves, Bt2390DerivedSamples) {
   EXPECT_NEAR(c->map(203.0 / 203) * 203, 203.0, 0.05);
   EXPECT_NEAR(c->map(400.0 / 203) * 203, 348.7, 0.05);
   EXPECT_NEAR(c->map(600.0 / 203) * 203, 390.5, 0.05);
+}
+
+using hdrd::testing::standard::Bt2390Report;  // BT.2390-10 §5.4 written out from the report
+
+TEST(ToneCurves, Bt2390BlackLiftIsTheReportsE3) {
+  const Bt2390Report pairs[] = {{0, 1000, 0.05, 600},    {0.005, 4000, 0.1, 1000}, {0, 1000, 0.01, 1000},
+                                {0.05, 1000, 0.005, 500}, {0, 4000, 0.02, 400},     {0.1, 2000, 0.1, 2000}};
+  for (const auto& r : pairs) {
+    const Display d{r.lmax, r.lmin, 203};
+    auto c = get("bt2390", d, {{"source_peak_nits", r.lw}, {"source_black_nits", r.lb}, {"black_lift", 1}});
+    SCOPED_TRACE(::testing::Message() << r.lb << "/" << r.lw << " -> " << r.lmin << "/" << r.lmax);
+    // Black lands on the display black (0.05 cd/m2, not 0.0547), and so does the source black.
+    EXPECT_NEAR(c->map(0) * 203, r.lmin, 1e-9 * r.lmin);
+    EXPECT_NEAR(c->map(r.lb / 203) * 203, r.lmin, 1e-9 * r.lmin);
+    for (double nits : {1e-4, 0.001, 0.01, 0.05, 0.1, 0.5, 1.0, 5.0, 26.0, 100.0, 203.0, 500.0, 1000.0, 3000.0}) {
+      // E3 lifts the top a little too (maxLum + b (1 - maxLum)^4): the display peak clips it.
+      const double want = std::min(r(nits), r.lmax);
+      EXPECT_NEAR(c->map(nits / 203) * 203, want, 1e-9 * want) << nits;
+      // Applied as max-rgb, the zero channels of a near-black colour are lifted as the
+      // report lifts each of R', G', B'.
+      const auto rgb = c->map_rgb({nits / 203, 0, 0}, Apply::max_rgb);
+      EXPECT_NEAR(rgb.x * 203, want, 1e-9 * want) << nits;
+      EXPECT_NEAR(rgb.y * 203, r.lmin, 1e-9 * r.lmin) << nits;
+    }
+  }
+}
+
+TEST(ToneCurves, Bt2390WithoutTheLiftLiftsNothing) {
+  // "No curve lifts black": below the source black the EETF without E3 is the identity, and
+  // black is 0.
+  const Display d{600, 0.05, 203};
+  auto c = get("bt2390", d, {{"source_peak_nits", 1000}, {"source_black_nits", 0.1}});
+  EXPECT_EQ(c->map(0), 0.0);
+  for (double nits : {1e-4, 0.01, 0.05, 0.099}) EXPECT_NEAR(c->map(nits / 203) * 203, nits, 1e-12) << nits;
+  // At the corner (display peak at or above the source peak) it is the identity up to the
+  // source peak and the source peak above it.
+  auto corner = get("bt2390", {1000, 0, 203}, {{"source_peak_nits", 1000}});
+  for (double nits : {1.0, 203.0, 998.0, 999.99}) EXPECT_NEAR(corner->map(nits / 203) * 203, nits, 1e-9 * nits);
+  EXPECT_NEAR(corner->map(1500 / 203.0) * 203, 1000, 1e-9);
+}
+
+// The numeric kink finder the table checks rely on, on functions whose kinks are known.
+TEST(FindKinks, FindsSlopeJumpsAndNotCurvatureJumps) {
+  const auto clamp = find_kinks([](double x) { return std::min(x, 3.7); }, 1e-3, 1e3);
+  ASSERT_EQ(clamp.size(), 1u);
+  EXPECT_NEAR(clamp[0], 3.7, 3.7e-9);
+  const auto two = find_kinks([](double x) { return x < 0.02 ? 0.0 : (x < 2 ? x - 0.02 : 1.98 + 0.25 * (x - 2)); },
+                              1e-4, 1e4);
+  ASSERT_EQ(two.size(), 2u);
+  EXPECT_NEAR(two[0], 0.02, 0.02 * 1e-9);
+  EXPECT_NEAR(two[1], 2.0, 2e-9);
+  // C1 joins (slope continuous, curvature not) are not kinks.
+  EXPECT_TRUE(find_kinks([](double x) { return x < 1 ? x : 1 + (x - 1) - 0.2 * (x - 1) * (x - 1); }, 1e-3, 2).empty());
+  EXPECT_TRUE(find_kinks([](double x) { return x / (1 + x); }, 1e-4, 1e4).empty());
+  // A small jump on a curved function: x^0.5 meeting a steeper power at 10.
+  const auto curved = find_kinks([](double x) { return x < 10 ? std::sqrt(x) : std::sqrt(10.0) * std::pow(x / 10, 0.6); },
+                                 1e-2, 1e2);
+  ASSERT_EQ(curved.size(), 1u);
+  EXPECT_NEAR(curved[0], 10.0, 1e-5);
+}
+
+// Every curve's declared kinks are kinks the finder sees (or outside its range), and every
+// kink it sees is declared: the fast path puts its table nodes on the declared ones.
+TEST(ToneCurves, DeclaredKinksAreTheCurvesKinks) {
+  for (const auto& info : curves()) {
+    if (!info.scalar) continue;
+    for (double peak : {100.0, 400.0, 1000.0, 4000.0, 10000.0}) {
+      const Display d{peak, 0.005, peak <= 100 ? peak : 203.0};
+      auto c = get(info.name, d);
+      const auto found = find_kinks([&](double x) { return c->map(x); }, 1e-4, 1e4);
+      const auto declared = c->kinks();
+      for (double k : found) {
+        const bool listed = std::any_of(declared.begin(), declared.end(), [&](double v) { return std::abs(v - k) <= 1e-5 * k; });
+        EXPECT_TRUE(listed) << info.name << " at peak " << peak << ": undeclared kink at x = " << k;
+      }
+    }
+  }
 }
 
 TEST(ToneCurves, ClipIsExactlyMinOfScaledValueAndPeak) {
