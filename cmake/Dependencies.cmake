@@ -12,6 +12,12 @@ find_package(spdlog CONFIG REQUIRED)
 find_package(CLI11 CONFIG REQUIRED)
 find_package(hwy CONFIG REQUIRED)
 
+find_package(ZLIB REQUIRED)
+# ISA-L's igzip deflates PNG image data several times faster than zlib at the same ratio,
+# with the sync flushes that let each thread compress its own segment of one zlib stream
+# (encode/io/zlib_stream.hpp; measured in docs/performance.md "Frame I/O").
+pkg_check_modules(ISAL REQUIRED IMPORTED_TARGET libisal)
+
 # Debian's OpenColorIOConfig.cmake computes a broken prefix: use pkg-config.
 pkg_check_modules(OCIO REQUIRED IMPORTED_TARGET OpenColorIO)
 

@@ -99,16 +99,18 @@ struct FrameJob::State {
   DisplayTarget target;
   std::vector<std::string> warnings;
   nlohmann::json timings = nlohmann::json::object();
+  bool durable = false;
   // render stage
   std::optional<EncodeSettings> settings;
   std::optional<PreparedPipeline> prepared;
   std::optional<EncodedFrame> gpu_frame;
   std::optional<Image> scene_frame;  // the full scene-referred frame, when read back
   // finish stage: the scene light the CPU encoded (the SDR rendition encodes it again)
-  std::optional<Image> exr_image;
+  std::optional<io::ExrImage> exr;
   SceneInput cpu_input;
   std::optional<EncodedFrame> sdr_frame;
   StillOptions stills;
+  io::PngOptions png;
   nlohmann::json render_info;
   double illuminance_lux = 0;
 
@@ -166,6 +168,9 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
   if (request.source == Source::pattern)
     if (auto ok = check_pattern_mode(request, s->target); !ok) return ok.error();
   s->stills = still_options(request, options.threads);
+  s->png.level = static_cast<int>(request.integer("png_level"));
+  s->png.threads = options.threads;
+  s->durable = request.boolean("durable");
   s->request = std::move(request);
   s->outputs = std::move(*outputs);
   s->options = std::move(options);
@@ -292,20 +297,26 @@ Result<EncodedFrame> finish_render(FrameJob::State& st) {
 
 Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   const auto t0 = Clock::now();
-  auto exr = st.input.bytes.empty() ? io::read_exr(st.input.path) : io::read_exr_memory(st.input.bytes);
+  // Half files decode straight to half pixels, which the encoder reads as they are.
+  const io::ExrReadOptions read{.half_pixels = true};
+  auto exr = st.input.bytes.empty() ? io::read_exr(st.input.path, read) : io::read_exr_memory(st.input.bytes, read);
   if (!exr) return exr.error();
   st.timings["read"] = ms_since(t0);
   for (auto& w : exr->warnings) st.warnings.push_back(std::move(w));
   if (st.stopped()) return cancelled();
+  st.exr = std::move(*exr);
   SceneInput in;
-  in.image = &exr->image;
-  in.to_working = exr->to_working();
+  if (st.exr->holds_half())
+    in.half = &st.exr->half;
+  else
+    in.image = &st.exr->image;
+  in.to_working = st.exr->to_working();
   // REFERENCE.md §1.1: relative unless the file has whiteLuminance or the request says.
   const std::string units = st.request.text("input");
-  in.units = units.empty() ? (exr->white_luminance ? InputUnits::absolute : InputUnits::relative)
+  in.units = units.empty() ? (st.exr->white_luminance ? InputUnits::absolute : InputUnits::relative)
                            : *parse_input_units(units);
-  in.white_luminance_nits = exr->white_luminance.value_or(1.0);
-  if (in.units == InputUnits::absolute && !exr->white_luminance)
+  in.white_luminance_nits = st.exr->white_luminance.value_or(1.0);
+  if (in.units == InputUnits::absolute && !st.exr->white_luminance)
     st.warnings.push_back("input absolute without whiteLuminance: values are taken as cd/m2");
   auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings);
   if (!settings) return settings.error();
@@ -322,14 +333,12 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   f->settings["input"] = {{"name", st.input.name.empty() ? st.input.path.string() : st.input.name},
                           {"units", to_string(in.units)},
                           {"white_luminance_nits", in.white_luminance_nits},
-                          {"channels", exr->channels},
-                          {"compression", exr->compression},
-                          {"width", exr->image.width},
-                          {"height", exr->image.height}};
+                          {"channels", st.exr->channels},
+                          {"compression", st.exr->compression},
+                          {"width", st.exr->width()},
+                          {"height", st.exr->height()}};
   if (!st.input.bytes.empty()) f->settings["input"]["bytes"] = st.input.bytes.size();
-  st.exr_image = std::move(exr->image);
   st.cpu_input = in;
-  st.cpu_input.image = &*st.exr_image;
   return f;
 }
 
@@ -399,7 +408,7 @@ Result<EncodedFrame> sdr_rendition(const SceneInput& in, const PreparedPipeline&
 
 Result<std::vector<std::uint8_t>> output_bytes(Output o, const FrameJob::State& st, const EncodedFrame& frame) {
   switch (o) {
-    case Output::png: return io::encode_png(frame);
+    case Output::png: return io::encode_png(frame, st.png);
     case Output::exr: return io::encode_display_exr(frame);
     case Output::raw: return frame.data;
     case Output::scene_exr: {
@@ -469,6 +478,7 @@ Result<FrameResult> FrameJob::finish() {
   frame->settings["request"] = resolved_request(st.request, *frame);
   result.frame = std::move(*frame);
   result.warnings = st.warnings;
+  result.durable = st.durable;
   result.timings_ms = st.timings;
   return result;
 }
@@ -513,7 +523,7 @@ Result<std::map<std::string, std::string>> write_outputs(const FrameResult& resu
   const std::string text = sidecar.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
   const std::filesystem::path sidecar_path = outbase.string() + ".json";
   files.push_back({sidecar_path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size())});
-  if (auto ok = io::write_all_or_nothing(files); !ok) return ok.error();
+  if (auto ok = io::write_all_or_nothing(files, {.durable = result.durable}); !ok) return ok.error();
   paths["sidecar"] = sidecar_path.string();
   return paths;
 }

@@ -60,6 +60,7 @@ struct FrameResult {
   std::vector<std::string> warnings;        // everything the user should know (fallbacks, clamps)
   nlohmann::json timings_ms = nlohmann::json::object();  // render, encode, outputs
   std::string encoder;                      // "gpu" or "cpu"
+  bool durable = false;                     // the request's `durable`: write_outputs fsyncs
   // The sidecar (docs/dump-format.md) without its "files": frame, target, metadata,
   // settings as resolved, the canonical request.
   nlohmann::json sidecar() const;

@@ -77,7 +77,7 @@ class TempFile {
   TempFile(TempFile&& o) noexcept : temp_(std::move(o.temp_)), final_(std::move(o.final_)) { o.temp_.clear(); }
   ~TempFile() { discard(); }
 
-  static Result<TempFile> write(const fs::path& final_path, std::span<const std::uint8_t> bytes);
+  static Result<TempFile> write(const fs::path& final_path, std::span<const std::uint8_t> bytes, bool durable);
   Result<void> commit();
   void discard() {
     if (!temp_.empty()) ::unlink(temp_.c_str());
@@ -111,7 +111,7 @@ Result<int> create_temp_file(const fs::path& final_path, fs::path& temp) {
 
 namespace {
 
-Result<TempFile> TempFile::write(const fs::path& final_path, std::span<const std::uint8_t> bytes) {
+Result<TempFile> TempFile::write(const fs::path& final_path, std::span<const std::uint8_t> bytes, bool durable) {
   TempFile t;
   auto fd = create_temp_file(final_path, t.temp_);
   if (!fd) return fd.error();
@@ -127,8 +127,9 @@ Result<TempFile> TempFile::write(const fs::path& final_path, std::span<const std
     }
     done += static_cast<std::size_t>(n);
   }
-  // fsync before rename, so that after a crash the name holds either the old or the new file.
-  if (::fsync(*fd) != 0) {
+  // Durable: the data reaches the disk before the rename, so that after a power cut the
+  // name holds the old file or the whole new one (a rename can reach the disk first).
+  if (durable && ::fsync(*fd) != 0) {
     const int err = errno;
     ::close(*fd);
     return write_error(final_path, "fsync failed", err);
@@ -143,41 +144,68 @@ Result<void> TempFile::commit() {
   return {};
 }
 
+fs::path directory_of(const fs::path& p) { return p.has_parent_path() ? p.parent_path() : fs::path("."); }
+
+// Durable: fsync the directories that hold the renamed names, so the renames themselves
+// survive a power cut (rename(2) is atomic, not durable).
+Result<void> sync_directories(const std::vector<fs::path>& finals) {
+  std::vector<fs::path> dirs;
+  for (const auto& f : finals)
+    if (std::find(dirs.begin(), dirs.end(), directory_of(f)) == dirs.end()) dirs.push_back(directory_of(f));
+  for (const auto& d : dirs) {
+    const int fd = ::open(d.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return write_error(d, "cannot open the directory to fsync it", errno);
+    const int rc = ::fsync(fd), err = errno;
+    ::close(fd);
+    if (rc != 0) return write_error(d, "fsync of the directory failed", err);
+  }
+  return {};
+}
+
 // Renames every temp file to its final name; if one fails, removes the files already
 // renamed (and the destructors remove the rest), so nothing is left half-done.
-Result<void> commit_all(std::vector<TempFile>& files) {
+Result<void> commit_all(std::vector<TempFile>& files, bool durable) {
+  std::vector<fs::path> finals;
   for (std::size_t i = 0; i < files.size(); ++i) {
+    finals.push_back(files[i].final_path());
     if (auto ok = files[i].commit(); !ok) {
       for (std::size_t j = 0; j < i; ++j) ::unlink(files[j].final_path().c_str());
       return ok.error();
     }
+  }
+  if (!durable) return {};
+  if (auto ok = sync_directories(finals); !ok) {  // not durable: take back what was renamed
+    for (const auto& f : finals) ::unlink(f.c_str());
+    return ok.error();
   }
   return {};
 }
 
 }  // namespace
 
-Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files) {
+Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files, const WriteOptions& write) {
   std::vector<TempFile> temps;
   for (const auto& f : files) {
-    auto t = TempFile::write(f.path, f.bytes);
+    auto t = TempFile::write(f.path, f.bytes, write.durable);
     if (!t) return t.error();
     temps.push_back(std::move(t.value()));
   }
-  return commit_all(temps);
+  return commit_all(temps, write.durable);
 }
 
-Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes) {
-  auto temp = TempFile::write(path, bytes);
+Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes, const WriteOptions& write) {
+  auto temp = TempFile::write(path, bytes, write.durable);
   if (!temp) return temp.error();
-  return temp->commit();
+  std::vector<TempFile> one;
+  one.push_back(std::move(temp.value()));
+  return commit_all(one, write.durable);
 }
 
 // ---- raw --------------------------------------------------------------------------------
 
-Result<void> write_raw(const fs::path& path, const EncodedFrame& frame) {
+Result<void> write_raw(const fs::path& path, const EncodedFrame& frame, const WriteOptions& write) {
   if (auto ok = detail::check_frame(frame); !ok) return ok.error();
-  return atomic_write(path, frame.data);
+  return atomic_write(path, frame.data, write);
 }
 
 // ---- sidecar ----------------------------------------------------------------------------
@@ -295,6 +323,9 @@ std::map<std::string, std::string> exr_attributes(const EncodedFrame& frame) {
   return a;
 }
 
+// EXR dump of an encoded frame: display light in the container primaries, scaled so that
+// value x whiteLuminance = cd/m2 (scRGB: nits / 80, whiteLuminance 80; otherwise
+// nits / paper white, whiteLuminance = paper white).
 }  // namespace
 
 Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame) {
@@ -307,10 +338,8 @@ Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame) 
                                               frame.width, frame.height));
   const double white = frame.target.mode == Mode::scrgb ? transfer::kScrgbUnitNits : frame.target.paper_white_nits;
   if (!(white > 0)) return make_error("dump.exr", "paper white must be positive for the EXR dump", "paper_white_nits");
-  Image scaled = nits;
-  const float inv = static_cast<float>(1.0 / white);
-  for (std::size_t i = 0; i < scaled.rgba.size(); ++i)
-    if (i % 4 != 3) scaled.rgba[i] *= inv;
+  // Scaled and rounded to half in one pass on every core (no float copy of the frame).
+  const ImageHalf scaled = to_half(nits, static_cast<float>(1.0 / white));
   ExrWriteOptions options;
   options.half = true;
   options.chromaticities = frame.target.container();
@@ -329,42 +358,26 @@ fs::path with_extension(const fs::path& outbase, std::string_view ext) {
   return p;
 }
 
-Result<std::vector<std::uint8_t>> dump_bytes(const EncodedFrame& frame, DumpFormat f) {
-  switch (f) {
-    case DumpFormat::png: return encode_png(frame);
-    case DumpFormat::exr: return encode_display_exr(frame);
-    case DumpFormat::raw: return frame.data;
-  }
-  return make_error("dump.format", "unknown dump format");
+// A file of the dump: its final path and the temp file holding its bytes until commit.
+Result<void> stage(std::vector<TempFile>& temps, const fs::path& path, std::span<const std::uint8_t> bytes,
+                   const WriteOptions& write) {
+  auto t = TempFile::write(path, bytes, write.durable);
+  if (!t) return t.error();
+  temps.push_back(std::move(t.value()));
+  return {};
 }
 
-}  // namespace
-
-Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbase,
-                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra) {
-  if (outbase.empty() || !outbase.has_filename())
-    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
-  if (auto ok = detail::check_frame(frame); !ok) return ok.error();
+std::vector<DumpFormat> unique_formats(const EncodedFrame& frame, const std::vector<DumpFormat>& formats) {
   std::vector<DumpFormat> wanted;
   for (DumpFormat f : formats.empty() ? default_formats(frame.target.mode) : formats)
     if (std::find(wanted.begin(), wanted.end(), f) == wanted.end()) wanted.push_back(f);
+  return wanted;
+}
 
-  // Encode everything in memory first, the formats concurrently (libpng is single-threaded),
-  // so that a format that cannot be produced fails before any file is touched.
-  std::vector<std::future<Result<std::vector<std::uint8_t>>>> jobs;
-  for (DumpFormat f : wanted)
-    jobs.push_back(std::async(std::launch::async, [&frame, f] { return dump_bytes(frame, f); }));
-  std::vector<std::pair<DumpFormat, std::vector<std::uint8_t>>> encoded;
-  std::optional<Error> failure;
-  for (std::size_t i = 0; i < jobs.size(); ++i) {
-    auto bytes = jobs[i].get();
-    if (!bytes && !failure) failure = bytes.error();
-    if (bytes) encoded.emplace_back(wanted[i], std::move(bytes.value()));
-  }
-  if (failure) return *failure;
-  DumpResult result;
-  std::map<std::string, std::string> names;  // relative to the sidecar's directory
-  for (const auto& [f, bytes] : encoded) {
+DumpResult list_files(const fs::path& outbase, const std::vector<DumpFormat>& wanted,
+                      const std::vector<ExtraFile>& extra, std::map<std::string, std::string>& names) {
+  DumpResult result;  // names: relative to the sidecar's directory
+  for (DumpFormat f : wanted) {
     const fs::path p = with_extension(outbase, extension(f));
     result.files[std::string(extension(f))] = p.string();
     names[std::string(extension(f))] = p.filename().string();
@@ -374,14 +387,60 @@ Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbas
     result.files[x.kind] = p.string();
     names[x.kind] = p.filename().string();
   }
+  return result;
+}
+
+}  // namespace
+
+Result<DumpResult> write_dumps(const EncodedFrame& frame, const fs::path& outbase,
+                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra,
+                               const DumpOptions& options) {
+  if (outbase.empty() || !outbase.has_filename())
+    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
+  if (auto ok = detail::check_frame(frame); !ok) return ok.error();
+  if (auto ok = check_png_options(options.png); !ok) return ok.error();
+  const std::vector<DumpFormat> wanted = unique_formats(frame, formats);
+  const auto wants = [&](DumpFormat f) { return std::find(wanted.begin(), wanted.end(), f) != wanted.end(); };
+  if (frame.target.mode == Mode::scrgb && wants(DumpFormat::png))  // before any work or file
+    return encode_png(frame, options.png).error();
+
+  // PNG and EXR encode concurrently (each on its own threads) while this thread stages the
+  // files that need no encoding (the raw buffer as the frame holds it, the extras). Nothing
+  // is renamed into place until every file exists, so a failure leaves nothing behind.
+  using Bytes = Result<std::vector<std::uint8_t>>;
+  std::optional<std::future<Bytes>> png, exr;
+  if (wants(DumpFormat::png))
+    png = std::async(std::launch::async, [&] { return encode_png(frame, options.png); });
+  if (wants(DumpFormat::exr)) exr = std::async(std::launch::async, [&] { return encode_display_exr(frame); });
+  std::vector<TempFile> temps;
+  std::optional<Error> failure;
+  const auto note = [&](Result<void> r) {
+    if (!r && !failure) failure = r.error();
+  };
+  if (wants(DumpFormat::raw)) note(stage(temps, with_extension(outbase, "raw"), frame.data, options.write));
+  for (const auto& x : extra)
+    if (!failure) note(stage(temps, outbase.string() + x.suffix, x.bytes, options.write));
+  for (auto* job : {&png, &exr}) {
+    if (!*job) continue;
+    Bytes bytes = (*job)->get();  // always waited for: the tasks read `frame`
+    if (!bytes) {
+      if (!failure) failure = bytes.error();
+      continue;
+    }
+    if (!failure)
+      note(stage(temps, with_extension(outbase, job == &png ? "png" : "exr"), *bytes, options.write));
+  }
+  if (failure) return *failure;
+
+  std::map<std::string, std::string> names;
+  DumpResult result = list_files(outbase, wanted, extra, names);
   const fs::path sidecar_path = with_extension(outbase, "json");
   const std::string sidecar = sidecar_json(frame, names).dump(2) + "\n";
-
-  std::vector<FileToWrite> files;
-  for (const auto& [f, bytes] : encoded) files.push_back({with_extension(outbase, extension(f)), bytes});
-  for (const auto& x : extra) files.push_back({outbase.string() + x.suffix, x.bytes});
-  files.push_back({sidecar_path, std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size())});
-  if (auto ok = write_all_or_nothing(files); !ok) return ok.error();
+  if (auto ok = stage(temps, sidecar_path,
+                      std::span(reinterpret_cast<const std::uint8_t*>(sidecar.data()), sidecar.size()), options.write);
+      !ok)
+    return ok.error();
+  if (auto ok = commit_all(temps, options.write.durable); !ok) return ok.error();
   result.files["sidecar"] = sidecar_path.string();
   return result;
 }

@@ -10,6 +10,8 @@
 #include <set>
 #include <thread>
 
+#include <sys/mman.h>
+
 #include <fmt/format.h>
 
 #include <OpenEXR/ImfChannelList.h>
@@ -23,7 +25,6 @@
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfRgbaFile.h>
 #include <OpenEXR/ImfStandardAttributes.h>
-#include <OpenEXR/ImfStdIO.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/Iex.h>
@@ -288,61 +289,106 @@ Result<void> check_sampling(const Imf::ChannelList& list, const ChannelPlan& pla
 
 // ---- pixel reading ---------------------------------------------------------------------
 
+// Transparent huge pages for a frame-sized buffer not yet touched (Linux's THP mode is
+// usually "madvise"): a 4K float frame is 32 000 page faults in 4 KiB pages, 64 in 2 MiB
+// ones. Only the 2 MiB-aligned interior can use them; a refusal changes nothing.
+void advise_huge_pages(void* p, std::size_t bytes) {
+  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+  const auto begin = (reinterpret_cast<std::uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+  const auto end = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(kHuge - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+}
+
+// A channel name the file does not have: OpenEXR fills such a slice with its fill value
+// (in its worker threads, while it decodes the rest).
+std::string absent_channel(const Imf::ChannelList& list, std::string name) {
+  while (list.findChannel(name)) name += "_";
+  return name;
+}
+
 // Reads in bands of scan lines into storage reserved up front but zero-filled band by band,
 // so a file that declares a large image and then breaks costs memory only for what it
 // really decoded (found by tests/fuzz/exr_fuzz: 500-byte files declaring 1 GiB images).
-void read_planned(Imf::MultiPartInputFile& file, int part_index, const ChannelPlan& plan, Image& img) {
+// Pixels is Image (float samples) or ImageHalf (half samples, read as stored).
+template <typename Pixels>
+void read_planned(Imf::MultiPartInputFile& file, int part_index, const ChannelPlan& plan, Pixels& img) {
+  using Sample = typename decltype(img.rgba)::value_type;
+  constexpr Imf::PixelType kType = sizeof(Sample) == 2 ? Imf::HALF : Imf::FLOAT;
   constexpr int kBandLines = 256;  // 8-16 chunks of the common compressions: keeps threads busy
-  const Imath::Box2i dw = file.header(part_index).dataWindow();
-  const std::size_t row_floats = 4 * static_cast<std::size_t>(img.width);
+  const Imf::Header& header = file.header(part_index);
+  const Imath::Box2i dw = header.dataWindow();
+  const std::size_t row_samples = 4 * static_cast<std::size_t>(img.width);
   img.rgba.clear();
-  img.rgba.reserve(row_floats * static_cast<std::size_t>(img.height));
+  img.rgba.reserve(row_samples * static_cast<std::size_t>(img.height));
   char* base = reinterpret_cast<char*>(img.rgba.data());  // stable: capacity is reserved
-  const std::size_t xs = 4 * sizeof(float), ys = xs * static_cast<std::size_t>(img.width);
+  advise_huge_pages(base, img.rgba.capacity() * sizeof(Sample));
+  const std::size_t xs = 4 * sizeof(Sample), ys = xs * static_cast<std::size_t>(img.width);
   Imf::FrameBuffer fb;
-  const auto add = [&](const std::string& channel, int slot) {
+  const auto add = [&](const std::string& channel, int slot, double fill) {
     if (!channel.empty())
-      fb.insert(channel, Imf::Slice::Make(Imf::FLOAT, base + slot * sizeof(float), dw, xs, ys));
+      fb.insert(channel, Imf::Slice::Make(kType, base + slot * sizeof(Sample), dw, xs, ys, 1, 1, fill));
   };
-  if (plan.kind == ChannelPlan::Kind::grey) add(plan.grey, 0);
-  else for (int i = 0; i < 3; ++i) add(plan.rgb[static_cast<std::size_t>(i)], i);
-  add(plan.alpha, 3);
+  if (plan.kind == ChannelPlan::Kind::grey) add(plan.grey, 0, 0.0);
+  else for (int i = 0; i < 3; ++i) add(plan.rgb[static_cast<std::size_t>(i)], i, 0.0);  // missing: the zero fill
+  add(plan.alpha.empty() ? absent_channel(header.channels(), "A") : plan.alpha, 3, 1.0);
   Imf::InputPart part(file, part_index);
   part.setFrameBuffer(fb);
   for (int y0 = dw.min.y; y0 <= dw.max.y; y0 += kBandLines) {
     const int y1 = std::min(dw.max.y, y0 + kBandLines - 1);
-    img.rgba.resize(row_floats * static_cast<std::size_t>(y1 - dw.min.y + 1));
+    img.rgba.resize(row_samples * static_cast<std::size_t>(y1 - dw.min.y + 1));
     part.readPixels(y0, y1);
   }
-  const bool grey = plan.kind == ChannelPlan::Kind::grey, opaque = plan.alpha.empty();
-  for (std::size_t i = 0, n = img.pixel_count(); i < n; ++i) {
-    float* p = img.rgba.data() + i * 4;
-    if (grey) p[1] = p[2] = p[0];
-    if (opaque) p[3] = 1.0f;
+  if (plan.kind == ChannelPlan::Kind::grey)
+    for (std::size_t i = 0, n = img.pixel_count(); i < n; ++i) {
+      Sample* p = img.rgba.data() + i * 4;
+      p[1] = p[2] = p[0];
+    }
+}
+
+// Whether every channel the plan reads is stored as half (then it can be read as it is).
+bool plan_is_half(const Imf::ChannelList& list, const ChannelPlan& plan) {
+  std::vector<std::string> used{plan.grey, plan.alpha, plan.rgb[0], plan.rgb[1], plan.rgb[2]};
+  if (plan.kind == ChannelPlan::Kind::luma_chroma)
+    used = {prefixed(plan.layer, "Y"), prefixed(plan.layer, "RY"), prefixed(plan.layer, "BY"), plan.alpha};
+  for (const std::string& c : used) {
+    if (c.empty()) continue;
+    const Imf::Channel* ch = list.findChannel(c);
+    if (ch && ch->type != Imf::HALF) return false;
   }
+  return true;
 }
 
 // Luminance/chroma (Y, RY, BY) images: OpenEXR's RgbaInputFile owns the reconstruction
 // (chroma upsampling and the Y/RY/BY -> RGB matrix from the file's chromaticities).
-void read_luma_chroma(Imf::IStream& stream, const ChannelPlan& plan, const Imath::Box2i& dw, Image& img) {
+void read_luma_chroma(Imf::IStream& stream, const ChannelPlan& plan, const Imath::Box2i& dw, ExrImage& out,
+                      bool keep_half) {
   stream.seekg(0);
   stream.clear();
   Imf::RgbaInputFile in(stream, plan.layer, exr_threads());
-  img.rgba.assign(img.pixel_count() * 4, 0.0f);
-  std::vector<Imf::Rgba> px(img.pixel_count());
+  const int w = out.image.width, h = out.image.height;
+  // Imf::Rgba is four halves, ImageHalf's pixel layout: half output needs no conversion.
+  static_assert(sizeof(Imf::Rgba) == 4 * sizeof(std::uint16_t));
+  ImageHalf px(w, h);
   // Slice::Make's trick: offset the base so that the data window's origin lands on px[0].
   const std::intptr_t offset =
-      (static_cast<std::intptr_t>(dw.min.x) + static_cast<std::intptr_t>(dw.min.y) * img.width) *
+      (static_cast<std::intptr_t>(dw.min.x) + static_cast<std::intptr_t>(dw.min.y) * w) *
       static_cast<std::intptr_t>(sizeof(Imf::Rgba));
-  in.setFrameBuffer(reinterpret_cast<Imf::Rgba*>(reinterpret_cast<std::intptr_t>(px.data()) - offset), 1,
-                    static_cast<std::size_t>(img.width));
+  in.setFrameBuffer(reinterpret_cast<Imf::Rgba*>(reinterpret_cast<std::intptr_t>(px.rgba.data()) - offset), 1,
+                    static_cast<std::size_t>(w));
   in.readPixels(dw.min.y, dw.max.y);
-  for (std::size_t i = 0; i < px.size(); ++i) {
-    float* p = img.rgba.data() + i * 4;
-    p[0] = px[i].r;
-    p[1] = px[i].g;
-    p[2] = px[i].b;
-    p[3] = plan.alpha.empty() ? 1.0f : static_cast<float>(px[i].a);
+  const std::uint16_t one = half(1.0f).bits();
+  if (plan.alpha.empty())
+    for (std::size_t i = 0; i < px.pixel_count(); ++i) px.rgba[i * 4 + 3] = one;
+  if (keep_half) {
+    out.half = std::move(px);
+    out.image = Image();
+    return;
+  }
+  out.image.rgba.resize(px.rgba.size());
+  for (std::size_t i = 0; i < px.rgba.size(); ++i) {
+    half v;
+    v.setBits(px.rgba[i]);
+    out.image.rgba[i] = v;
   }
 }
 
@@ -354,10 +400,11 @@ int first_image_part(const Imf::MultiPartInputFile& file) {
   return -1;
 }
 
-Result<ExrImage> read_stream(Imf::IStream& stream, const std::string& name) {
+Result<ExrImage> read_stream(Imf::IStream& stream, const std::string& name, const ExrReadOptions& options) {
   ExrImage out;
   ChannelPlan plan;
   Imath::Box2i dw;
+  bool keep_half = false;
   {
     Imf::MultiPartInputFile file(stream, exr_threads());
     const int part = first_image_part(file);
@@ -376,19 +423,27 @@ Result<ExrImage> read_stream(Imf::IStream& stream, const std::string& name) {
     if (auto s = check_sampling(h.channels(), plan, name); !s) return s.error();
     out.image.width = static_cast<int>(w);
     out.image.height = static_cast<int>(ht);
+    keep_half = options.half_pixels && plan_is_half(h.channels(), plan);
     if (plan.kind != ChannelPlan::Kind::luma_chroma) {
-      read_planned(file, part, plan, out.image);
+      if (!keep_half) {
+        read_planned(file, part, plan, out.image);
+        return out;
+      }
+      out.half.width = out.image.width;
+      out.half.height = out.image.height;
+      out.image = Image();
+      read_planned(file, part, plan, out.half);
       return out;
     }
     if (part != 0) return exr_error(name, "exr.unsupported", "luminance/chroma images are read only from part 0");
   }
-  read_luma_chroma(stream, plan, dw, out.image);
+  read_luma_chroma(stream, plan, dw, out, keep_half);
   return out;
 }
 
-Result<ExrImage> read_guarded(Imf::IStream& stream, const std::string& name) {
+Result<ExrImage> read_guarded(Imf::IStream& stream, const std::string& name, const ExrReadOptions& options) {
   try {
-    return read_stream(stream, name);
+    return read_stream(stream, name, options);
   } catch (const std::bad_alloc&) {
     return exr_error(name, "exr.corrupt", "out of memory while decoding (corrupt sizes?)");
   } catch (const std::exception& e) {
@@ -543,20 +598,21 @@ Result<void> prescan_header(std::span<const std::uint8_t> bytes, const std::stri
   return {};
 }
 
-Result<ExrImage> read_exr_bytes(std::span<const std::uint8_t> bytes, const std::string& name) {
+Result<ExrImage> read_exr_bytes(std::span<const std::uint8_t> bytes, const std::string& name,
+                                const ExrReadOptions& options) {
   if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
     return exr_error(name, "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
   if (auto ok = prescan_header(bytes, name); !ok) return ok.error();
   exr_threads();
   MemoryIStream stream(bytes, name);
-  return read_guarded(stream, name);
+  return read_guarded(stream, name, options);
 }
 
 }  // namespace
 
 // The whole file is read into memory first: the header pre-scan needs the file size and
 // the compressed file is small next to the decoded float image.
-Result<ExrImage> read_exr(const fs::path& path) {
+Result<ExrImage> read_exr(const fs::path& path, const ExrReadOptions& options) {
   const std::string name = path.string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return make_error("exr.missing", fmt::format("cannot read EXR {}: no such file", name));
@@ -570,10 +626,12 @@ Result<ExrImage> read_exr(const fs::path& path) {
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
   if (!file.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
     return make_error("exr.unreadable", fmt::format("cannot read EXR {}: read failed", name));
-  return read_exr_bytes(bytes, name);
+  return read_exr_bytes(bytes, name, options);
 }
 
-Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes) { return read_exr_bytes(bytes, "<memory>"); }
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options) {
+  return read_exr_bytes(bytes, "<memory>", options);
+}
 
 // ---- writing ---------------------------------------------------------------------------
 
@@ -584,16 +642,22 @@ Imf::Chromaticities to_imf(const color::Primaries& p) {
   return Imf::Chromaticities(v(p.red), v(p.green), v(p.blue), v(p.white));
 }
 
+// Whether some alpha differs from 1 (a missing A reads back as 1, so A is written only then).
+bool has_alpha(const ImageHalf& image) {
+  const std::uint16_t one = half(1.0f).bits();
+  for (std::size_t i = 3; i < image.rgba.size(); i += 4)
+    if (image.rgba[i] != one) return true;
+  return false;
+}
 bool has_alpha(const Image& image) {
   for (std::size_t i = 3; i < image.rgba.size(); i += 4)
     if (image.rgba[i] != 1.0f) return true;
   return false;
 }
 
-// RGB, plus A only when some alpha differs from 1 (a missing A reads back as 1).
-Imf::Header make_header(const Image& image, const ExrWriteOptions& options, Imf::Compression compression,
+Imf::Header make_header(int width, int height, const ExrWriteOptions& options, Imf::Compression compression,
                         bool alpha) {
-  Imf::Header h(image.width, image.height);
+  Imf::Header h(width, height);
   h.compression() = compression;
   const Imf::PixelType type = options.half ? Imf::HALF : Imf::FLOAT;
   for (const char* c : {"R", "G", "B", "A"})
@@ -605,52 +669,134 @@ Imf::Header make_header(const Image& image, const ExrWriteOptions& options, Imf:
   return h;
 }
 
-}  // namespace
+// An Imf::OStream into a byte vector: the file is built where it is returned, with no
+// std::string in between (Imf::StdOSStream's str() and the copy out of it were two copies).
+// OpenEXR seeks back to write the chunk offset table, so writes land at the position.
+class VectorOStream final : public Imf::OStream {
+ public:
+  explicit VectorOStream(std::vector<std::uint8_t>& out) : Imf::OStream("<memory>"), out_(out) {}
+  void write(const char c[], int n) override {
+    const auto count = static_cast<std::size_t>(n);
+    if (pos_ + count > out_.size()) out_.resize(pos_ + count);
+    std::memcpy(out_.data() + pos_, c, count);
+    pos_ += count;
+  }
+  std::uint64_t tellp() override { return pos_; }
+  void seekp(std::uint64_t pos) override { pos_ = pos; }
 
-Result<std::vector<std::uint8_t>> encode_exr(const Image& image, const ExrWriteOptions& options) {
-  if (auto size = check_image_size(image.width, image.height); !size) return size.error();
-  if (image.rgba.size() != image.pixel_count() * 4)
-    return make_error("exr.write", fmt::format("image buffer holds {} floats, expected {} for {}x{} RGBA",
-                                               image.rgba.size(), image.pixel_count() * 4, image.width, image.height));
+ private:
+  std::vector<std::uint8_t>& out_;
+  std::uint64_t pos_ = 0;
+};
+
+Result<Imf::Compression> compression_of(const ExrWriteOptions& options) {
   const auto compression = parse_compression(options.compression);
   if (!compression)
     return make_error("exr.write",
                       fmt::format("unknown EXR compression '{}' (none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa, dwab)",
                                   options.compression),
                       "compression");
-  exr_threads();
+  return *compression;
+}
+
+// Writes interleaved RGBA samples (half or float, as options.half says) with OpenEXR's
+// thread pool compressing the chunks.
+Result<std::vector<std::uint8_t>> write_samples(int width, int height, const char* base, bool alpha,
+                                                const ExrWriteOptions& options) {
+  auto compression = compression_of(options);
+  if (!compression) return compression.error();
   try {
-    const bool alpha = has_alpha(image);
-    const Imf::Header header = make_header(image, options, *compression, alpha);
-    Imf::StdOSStream stream;
+    const Imf::Header header = make_header(width, height, options, *compression, alpha);
+    std::vector<std::uint8_t> bytes;
+    bytes.reserve(static_cast<std::size_t>(width) * height * (options.half ? 6 : 12) / 2 + 4096);
+    VectorOStream stream(bytes);
     {
       Imf::OutputFile out(stream, header, exr_threads());
-      // OpenEXR does not convert float to half on output: round here (nearest even,
-      // Imath::half's conversion, overflow to +-Inf).
-      std::vector<half> halves;
-      if (options.half) halves.assign(image.rgba.begin(), image.rgba.end());
-      const std::size_t bytes = options.half ? sizeof(half) : sizeof(float);
-      char* base = options.half ? reinterpret_cast<char*>(halves.data())
-                                : const_cast<char*>(reinterpret_cast<const char*>(image.rgba.data()));
-      const std::size_t xs = 4 * bytes, ys = xs * static_cast<std::size_t>(image.width);
+      const std::size_t sample = options.half ? sizeof(half) : sizeof(float);
+      const std::size_t xs = 4 * sample, ys = xs * static_cast<std::size_t>(width);
       Imf::FrameBuffer fb;
       const char* names[4] = {"R", "G", "B", "A"};
       for (int c = 0; c < (alpha ? 4 : 3); ++c)
-        fb.insert(names[c], Imf::Slice(options.half ? Imf::HALF : Imf::FLOAT, base + c * bytes, xs, ys));
+        fb.insert(names[c], Imf::Slice(options.half ? Imf::HALF : Imf::FLOAT, const_cast<char*>(base) + c * sample, xs, ys));
       out.setFrameBuffer(fb);
-      out.writePixels(image.height);
+      out.writePixels(height);
     }  // the destructor writes the offset table
-    const std::string s = stream.str();
-    return std::vector<std::uint8_t>(s.begin(), s.end());
+    return bytes;
   } catch (const std::exception& e) {
     return make_error("exr.write", fmt::format("cannot encode EXR: {}", one_line(e.what())));
   }
 }
 
-Result<void> write_exr(const fs::path& path, const Image& image, const ExrWriteOptions& options) {
+template <typename Pixels>
+Result<void> check_pixels(const Pixels& image) {
+  if (auto size = check_image_size(image.width, image.height); !size) return size.error();
+  if (image.rgba.size() != image.pixel_count() * 4)
+    return make_error("exr.write", fmt::format("image buffer holds {} samples, expected {} for {}x{} RGBA",
+                                               image.rgba.size(), image.pixel_count() * 4, image.width, image.height));
+  return {};
+}
+
+}  // namespace
+
+ImageHalf to_half(const Image& image, float rgb_scale, int threads) {
+  ImageHalf out(image.width, image.height);
+  const std::size_t n = image.pixel_count();
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int parts = static_cast<int>(std::clamp<std::size_t>(n / 65536, 1, static_cast<std::size_t>(threads > 0 ? threads : hw)));
+  const auto convert = [&](std::size_t begin, std::size_t end) {
+    const float* in = image.rgba.data();
+    std::uint16_t* o = out.rgba.data();
+    for (std::size_t i = begin * 4; i < end * 4; i += 4) {
+      // The same float product, then Imath's rounding: bit-identical to scaling first.
+      for (int c = 0; c < 3; ++c) o[i + c] = half(in[i + c] * rgb_scale).bits();
+      o[i + 3] = half(in[i + 3]).bits();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int p = 1; p < parts; ++p) pool.emplace_back(convert, n * p / parts, n * (p + 1) / parts);
+  convert(0, n / parts);
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+Result<std::vector<std::uint8_t>> encode_exr(const Image& image, const ExrWriteOptions& options) {
+  if (auto ok = check_pixels(image); !ok) return ok.error();
+  if (auto c = compression_of(options); !c) return c.error();
+  exr_threads();
+  const bool alpha = has_alpha(image);
+  if (!options.half)
+    return write_samples(image.width, image.height, reinterpret_cast<const char*>(image.rgba.data()), alpha, options);
+  // OpenEXR does not convert float to half on output: round here (nearest even, overflow to +-Inf).
+  ImageHalf halves;
+  try {
+    halves = to_half(image);
+  } catch (const std::exception& e) {
+    return make_error("exr.write", fmt::format("cannot encode EXR: {}", one_line(e.what())));
+  }
+  return write_samples(image.width, image.height, reinterpret_cast<const char*>(halves.rgba.data()), alpha, options);
+}
+
+Result<std::vector<std::uint8_t>> encode_exr(const ImageHalf& image, const ExrWriteOptions& options) {
+  if (auto ok = check_pixels(image); !ok) return ok.error();
+  if (!options.half)
+    return make_error("exr.write", "half pixels are written as half channels (ExrWriteOptions::half)", "half");
+  exr_threads();
+  return write_samples(image.width, image.height, reinterpret_cast<const char*>(image.rgba.data()), has_alpha(image),
+                       options);
+}
+
+Result<void> write_exr(const fs::path& path, const Image& image, const ExrWriteOptions& options,
+                       const WriteOptions& write) {
   auto bytes = encode_exr(image, options);
   if (!bytes) return bytes.error();
-  return atomic_write(path, *bytes);
+  return atomic_write(path, *bytes, write);
+}
+
+Result<void> write_exr(const fs::path& path, const ImageHalf& image, const ExrWriteOptions& options,
+                       const WriteOptions& write) {
+  auto bytes = encode_exr(image, options);
+  if (!bytes) return bytes.error();
+  return atomic_write(path, *bytes, write);
 }
 
 }  // namespace hdrd::io

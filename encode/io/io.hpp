@@ -1,6 +1,7 @@
 // Frame I/O: OpenEXR read/write, PNG (16-bit with cICP/mDCV/cLLI for HDR, 8-bit sRGB
 // for SDR), raw DRM-format buffers, UI overlay PNGs, JSON sidecars. Every write is
 // atomic (temp file in the same directory + rename): a failure leaves no partial file.
+// WriteOptions::durable adds fsync for files that must survive a power cut.
 #pragma once
 
 #include <cstdint>
@@ -20,9 +21,21 @@
 
 namespace hdrd::io {
 
+// ---- writing files ----------------------------------------------------------------------
+struct WriteOptions {
+  // Atomic either way (temp file + rename: a reader or a crash of hdrd never sees a partial
+  // file). durable: also fsync each file before its rename and the directory after it, so
+  // the new file, not an empty or old one, is there after a power cut; costs the disk's
+  // write-back time (docs/dump-format.md "Durable writes").
+  bool durable = false;
+};
+
 // ---- OpenEXR --------------------------------------------------------------------------
 struct ExrImage {
   Image image;  // RGBA float; Y-only and single-channel files are replicated to grey RGB, A = 1
+  // The same pixels as half RGBA, instead of `image` (which is then empty), when
+  // ExrReadOptions::half_pixels was asked for and every channel read is stored as half.
+  ImageHalf half;
   std::optional<color::Primaries> chromaticities;  // the file's attribute, if any
   bool is_xyz = false;                              // chromaticities are CIE XYZ's own
   std::optional<double> white_luminance;            // cd/m2 of RGB (1,1,1), if present
@@ -34,10 +47,18 @@ struct ExrImage {
   // Matrix from the file's RGB (or XYZ) to linear Rec.2020 D65: Rec.709 when the file
   // says nothing; Bradford for non-D65 RGB; never adapted for XYZ.
   color::Mat3 to_working() const;
+  bool holds_half() const { return !half.rgba.empty(); }
+  int width() const { return holds_half() ? half.width : image.width; }
+  int height() const { return holds_half() ? half.height : image.height; }
 };
 
-Result<ExrImage> read_exr(const std::filesystem::path& path);
-Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes);
+struct ExrReadOptions {
+  // Half files decode straight into ExrImage::half (what SceneInput::half takes): no
+  // float conversion, half the memory; files with any float or uint channel still give `image`.
+  bool half_pixels = false;
+};
+Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {});
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options = {});
 
 struct ExrWriteOptions {
   bool half = true;  // half or float32 channels
@@ -47,15 +68,35 @@ struct ExrWriteOptions {
   std::map<std::string, std::string> attributes;  // written as string attributes ("hdrd:<key>")
   std::string compression = "zip";               // none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa, dwab
 };
-Result<void> write_exr(const std::filesystem::path& path, const Image& image, const ExrWriteOptions& options);
+Result<void> write_exr(const std::filesystem::path& path, const Image& image, const ExrWriteOptions& options,
+                       const WriteOptions& write = {});
 Result<std::vector<std::uint8_t>> encode_exr(const Image& image, const ExrWriteOptions& options);
+// Half pixels as they are (options.half must be true): no conversion on the way out.
+Result<std::vector<std::uint8_t>> encode_exr(const ImageHalf& image, const ExrWriteOptions& options);
+Result<void> write_exr(const std::filesystem::path& path, const ImageHalf& image, const ExrWriteOptions& options,
+                       const WriteOptions& write = {});
+// RGBA float to half (round to nearest even, overflow to +-Inf, as Imath::half), RGB
+// multiplied by rgb_scale first; on `threads` threads (0: every hardware thread).
+ImageHalf to_half(const Image& image, float rgb_scale = 1.0f, int threads = 0);
 
 // ---- PNG ------------------------------------------------------------------------------
 // hdr10/hlg/10-bit SDR: 16-bit RGB with cICP (+ mDCV and cLLI for hdr10/hlg);
 // 8-bit SDR: 8-bit RGB with sRGB (or gAMA for gamma 2.2 / BT.1886) chunks.
 // scrgb has no PNG form: an error.
-Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame);
-Result<void> write_png(const std::filesystem::path& path, const EncodedFrame& frame);
+inline constexpr int kMinPngLevel = 0;      // stored: no compression
+inline constexpr int kDefaultPngLevel = 1;  // fast: 75-90 % of the raw size for 16-bit photographs
+inline constexpr int kMaxPngLevel = 9;      // smallest, several times slower
+struct PngOptions {
+  // Deflate level: 0 stores; 1-3 fast (ISA-L's igzip levels, the Sub filter); 4-9 smaller
+  // and much slower (Paeth filter, zlib's level or ISA-L's best, whichever is smaller).
+  // docs/dump-format.md "PNG compression" has the sizes and speeds.
+  int level = kDefaultPngLevel;
+  int threads = 0;  // 0: every hardware thread; the file is the same for any count
+};
+Result<void> check_png_options(const PngOptions& options);  // "png.level" / "png.threads" errors
+Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame, const PngOptions& options = {});
+Result<void> write_png(const std::filesystem::path& path, const EncodedFrame& frame, const PngOptions& options = {},
+                       const WriteOptions& write = {});
 
 // The PNG chunks hdrd writes, read back (for tests and `hdrd inspect`).
 struct PngInfo {
@@ -75,7 +116,7 @@ Result<OverlayImage> read_overlay_png(const std::filesystem::path& path, bool pr
 Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied = false);
 
 // ---- Raw buffers and sidecars -----------------------------------------------------------
-Result<void> write_raw(const std::filesystem::path& path, const EncodedFrame& frame);
+Result<void> write_raw(const std::filesystem::path& path, const EncodedFrame& frame, const WriteOptions& write = {});
 
 // Everything a reader needs to interpret a dump: mode, fourcc, width, height, stride,
 // range, bits, peak, black, paper/UI/SDR white, primaries, mastering metadata,
@@ -84,7 +125,8 @@ Result<void> write_raw(const std::filesystem::path& path, const EncodedFrame& fr
 nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::string, std::string>& files);
 
 // Writes bytes to `path` atomically.
-Result<void> atomic_write(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+Result<void> atomic_write(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
+                          const WriteOptions& write = {});
 // For writers that stream (video): creates "<dir>/.<name>.tmp-<random>" beside final_path
 // with O_EXCL and returns its open descriptor (the caller closes it, and renames the file
 // to final_path once it is complete, or removes it).
@@ -96,7 +138,7 @@ struct FileToWrite {
   std::filesystem::path path;
   std::span<const std::uint8_t> bytes;
 };
-Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files);
+Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files, const WriteOptions& write = {});
 
 // The EXR form of an encoded frame (needs frame.display_nits): display light in the
 // container primaries, half float, scaled so that value x whiteLuminance = cd/m2 (scRGB:
@@ -117,10 +159,15 @@ struct ExtraFile {
   std::string kind, suffix;
   std::vector<std::uint8_t> bytes;
 };
+struct DumpOptions {
+  PngOptions png;
+  WriteOptions write;
+};
 // Writes OUTBASE.png / OUTBASE.exr / OUTBASE.raw, the extra files and OUTBASE.json (which
 // lists them all). Either every file is written or none is left behind. The EXR needs
 // frame.display_nits.
 Result<DumpResult> write_dumps(const EncodedFrame& frame, const std::filesystem::path& outbase,
-                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra = {});
+                               const std::vector<DumpFormat>& formats, const std::vector<ExtraFile>& extra = {},
+                               const DumpOptions& options = {});
 
 }  // namespace hdrd::io

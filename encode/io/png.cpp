@@ -1,20 +1,30 @@
 // PNG write (16-bit RGB with cICP/mDCV/cLLI for HDR and 10-bit SDR, 8-bit RGB for
 // 8-bit SDR) and read (hdrd's chunks back, UI overlays of any colour type).
 //
+// Writing frames its own chunks (PNG 3rd edition §5) around one zlib stream compressed on
+// every core (io/zlib_stream.hpp): libpng compresses on one thread, which made the PNG most
+// of what `hdrd encode` waited for (docs/performance.md "Frame I/O"). Reading uses libpng.
+//
 // libpng reports errors by longjmp. Every setjmp below sits in a function whose C++
 // objects all exist before the setjmp, so a longjmp never skips a destructor.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <csetjmp>
 #include <cstring>
 #include <fstream>
+#include <optional>
+#include <span>
+#include <thread>
 
 #include <fmt/format.h>
+#include <isa-l/crc.h>
 #include <png.h>
 
 #include "encode/io/io.hpp"
 #include "encode/io/internal.hpp"
 #include "encode/io/signal_metadata.hpp"
+#include "encode/io/zlib_stream.hpp"
 
 namespace hdrd::io {
 namespace fs = std::filesystem;
@@ -87,23 +97,35 @@ std::vector<std::uint8_t> clli_for(const ContentLightLevel& l, const MasteringDi
 struct RowSource {
   const EncodedFrame* frame = nullptr;
   bool sixteen = false;
+  bool narrow = false;  // narrow-range frames take their samples from the codes (detail::sample16)
 
+  // The per-row choice is made once per row, not per sample: the writer's inner loops
+  // must vectorise (PNG writing at every core's speed, docs/performance.md "Frame I/O").
   void fill(int y, std::uint8_t* row) const {
     const auto& f = *frame;
     const std::uint8_t* src = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes;
-    for (int x = 0; x < f.width; ++x) {
-      if (!sixteen) {  // XRGB8888 bytes B, G, R, X
+    if (!sixteen) {  // XRGB8888 bytes B, G, R, X
+      for (int x = 0; x < f.width; ++x) {
         row[x * 3 + 0] = src[x * 4 + 2];
         row[x * 3 + 1] = src[x * 4 + 1];
         row[x * 3 + 2] = src[x * 4 + 0];
-        continue;
       }
+      return;
+    }
+    if (!narrow && !f.signal16.empty()) {  // sample16's first case, row at a time
+      const std::uint16_t* s = f.signal16.data() + static_cast<std::size_t>(y) * f.width * 3;
+      for (int i = 0; i < f.width * 3; ++i) {
+        row[i * 2] = static_cast<std::uint8_t>(s[i] >> 8);
+        row[i * 2 + 1] = static_cast<std::uint8_t>(s[i]);
+      }
+      return;
+    }
+    for (int x = 0; x < f.width; ++x)
       for (int c = 0; c < 3; ++c) {
         const std::uint16_t s = detail::sample16(f, x, y, c);
         row[x * 6 + c * 2] = static_cast<std::uint8_t>(s >> 8);
         row[x * 6 + c * 2 + 1] = static_cast<std::uint8_t>(s);
       }
-    }
   }
 
 };
@@ -114,98 +136,276 @@ struct PngWriteJob {
   std::vector<std::uint8_t> cicp;
   std::vector<std::uint8_t> mdcv, clli;  // empty = not written
   enum class Legacy { none, srgb, gamma22, bt1886 } legacy = Legacy::none;
-  std::vector<std::uint8_t> row;
-  std::vector<std::uint8_t> out;
-  PngErrorState error;
+  PngOptions options;
+
+  std::size_t row_bytes() const { return static_cast<std::size_t>(width) * 3 * (bit_depth / 8); }
+  std::size_t pixel_bytes() const { return bit_depth / 8 * 3; }
 };
 
-void append_bytes(png_structp png, png_bytep data, std::size_t n) {
-  auto* job = static_cast<PngWriteJob*>(png_get_io_ptr(png));
-  bool failed = false;
-  try {
-    job->out.insert(job->out.end(), data, data + n);
-  } catch (...) {
-    failed = true;
-  }
-  if (failed) png_error(png, "out of memory");
+std::uint32_t crc32_of(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0) {
+  return crc32_gzip_refl(crc, bytes.data(), bytes.size());  // PNG's CRC-32 (§5.5) is gzip's, reflected
 }
 
-void set_unknown_chunks(png_structp png, png_infop info, PngWriteJob& job) {
-  png_unknown_chunk chunks[3]{};
-  int n = 0;
-  const auto add = [&](const char* name, std::uint8_t* data, std::size_t size) {
-    std::memcpy(chunks[n].name, name, 5);
-    chunks[n].data = data;
-    chunks[n].size = size;
-    chunks[n].location = PNG_HAVE_IHDR;
-    ++n;
-  };
-  add("cICP", job.cicp.data(), job.cicp.size());
-  if (!job.mdcv.empty()) add("mDCV", job.mdcv.data(), job.mdcv.size());
-  if (!job.clli.empty()) add("cLLI", job.clli.data(), job.clli.size());
-  // Without ALWAYS libpng silently drops these (their 4th letter is upper case: not
-  // safe-to-copy); platform-debian12.md §6.
-  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_ALWAYS,
-                              reinterpret_cast<png_const_bytep>("cICP\0mDCV\0cLLI\0"), 3);
-  png_set_unknown_chunks(png, info, chunks, n);
-  for (int i = 0; i < n; ++i) png_set_unknown_chunk_location(png, info, i, PNG_HAVE_IHDR);
+// ---- writing: rows, filters, chunks ------------------------------------------------------
+
+// PNG 3rd edition §5.3: length, type, data, CRC-32 over type + data.
+void put_chunk(std::vector<std::uint8_t>& out, const char type[4], std::span<const std::uint8_t> data) {
+  put_u32(out, static_cast<std::uint32_t>(data.size()));
+  const std::size_t at = out.size();
+  out.insert(out.end(), type, type + 4);
+  out.insert(out.end(), data.begin(), data.end());
+  put_u32(out, crc32_of(std::span(out).subspan(at)));
 }
 
-void set_legacy_colour(png_structp png, png_infop info, PngWriteJob::Legacy legacy) {
+// IHDR, then the colour chunks libpng wrote before (gAMA, sRGB, cHRM), then cICP, mDCV,
+// cLLI: all before IDAT, as PNG 3rd edition §5.6 orders them.
+void put_header_chunks(std::vector<std::uint8_t>& out, const PngWriteJob& job) {
+  out.insert(out.end(), {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'});
+  std::vector<std::uint8_t> ihdr;
+  put_u32(ihdr, static_cast<std::uint32_t>(job.width));
+  put_u32(ihdr, static_cast<std::uint32_t>(job.height));
+  ihdr.insert(ihdr.end(), {static_cast<std::uint8_t>(job.bit_depth), 2, 0, 0, 0});  // RGB, deflate, filter set 0, no interlace
+  put_chunk(out, "IHDR", ihdr);
   using L = PngWriteJob::Legacy;
-  if (legacy == L::none) return;
-  if (legacy == L::srgb) {
-    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
-    return;
+  if (job.legacy != L::none) {
+    // gAMA holds the encoding exponent x 100000: 1/2.2 -> 45455 (also sRGB's, §11.3.3.5), 1/2.4 -> 41667.
+    std::vector<std::uint8_t> gama;
+    put_u32(gama, job.legacy == L::bt1886 ? 41667 : 45455);
+    put_chunk(out, "gAMA", gama);
+    if (job.legacy == L::srgb) put_chunk(out, "sRGB", std::array<std::uint8_t, 1>{0});  // perceptual
+    // cHRM: BT.709 / sRGB primaries and D65 x 100000.
+    std::vector<std::uint8_t> chrm;
+    for (std::uint32_t v : {31270u, 32900u, 64000u, 33000u, 30000u, 60000u, 15000u, 6000u}) put_u32(chrm, v);
+    put_chunk(out, "cHRM", chrm);
   }
-  // gAMA holds the encoding exponent x 100000: 1/2.2 -> 45455, 1/2.4 -> 41667.
-  png_set_gAMA_fixed(png, info, legacy == L::gamma22 ? 45455 : 41667);
-  png_set_cHRM_fixed(png, info, 31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000);
+  put_chunk(out, "cICP", job.cicp);
+  if (!job.mdcv.empty()) put_chunk(out, "mDCV", job.mdcv);
+  if (!job.clli.empty()) put_chunk(out, "cLLI", job.clli);
 }
 
-bool run_png_write(PngWriteJob& job) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &job.error, on_png_error, on_png_warning);
-  if (!png) return false;
-  png_infop info = png_create_info_struct(png);
-  if (!info) {
-    png_destroy_write_struct(&png, nullptr);
-    return false;
+// Row filters (PNG 3rd edition §9.2, filter method 0) on the raw bytes of one scan line;
+// `bpp` bytes per pixel, `above` the raw line above (zeros for the first). The encoder
+// reads only raw bytes, so every filter is a loop without a serial dependency.
+enum class Filter : std::uint8_t { none = 0, sub = 1, up = 2, average = 3, paeth = 4 };
+
+void filter_line(Filter f, const std::uint8_t* __restrict raw, const std::uint8_t* __restrict above, std::size_t n,
+                 std::size_t bpp, std::uint8_t* __restrict out) {
+  const std::size_t lead = std::min(bpp, n);  // the first pixel has no left neighbour (a = c = 0)
+  switch (f) {
+    case Filter::none: std::memcpy(out, raw, n); return;
+    case Filter::sub:
+      std::memcpy(out, raw, lead);
+      for (std::size_t i = lead; i < n; ++i) out[i] = static_cast<std::uint8_t>(raw[i] - raw[i - bpp]);
+      return;
+    case Filter::up:
+      for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>(raw[i] - above[i]);
+      return;
+    case Filter::average:
+      for (std::size_t i = 0; i < lead; ++i) out[i] = static_cast<std::uint8_t>(raw[i] - (above[i] >> 1));
+      for (std::size_t i = lead; i < n; ++i)
+        out[i] = static_cast<std::uint8_t>(raw[i] - ((raw[i - bpp] + above[i]) >> 1));
+      return;
+    case Filter::paeth:
+      for (std::size_t i = 0; i < lead; ++i) out[i] = static_cast<std::uint8_t>(raw[i] - above[i]);  // Paeth(0, b, 0) = b
+      for (std::size_t i = lead; i < n; ++i) {
+        const int a = raw[i - bpp], b = above[i], c = above[i - bpp];
+        const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);  // |p-a|, |p-b|, |p-c|
+        const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+        out[i] = static_cast<std::uint8_t>(raw[i] - pred);
+      }
+      return;
   }
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    return false;
+}
+
+// PNG §12.8's heuristic (libpng's default): the filter whose output, read as signed
+// bytes, has the smallest sum of magnitudes. `trial` holds 5 lines of scratch.
+Filter adaptive_filter_line(const std::uint8_t* raw, const std::uint8_t* above, std::size_t n, std::size_t bpp,
+                            std::uint8_t* trial, std::uint8_t* out) {
+  Filter best = Filter::none;
+  std::uint64_t best_sum = UINT64_MAX;
+  for (int f = 0; f < 5; ++f) {
+    std::uint8_t* t = trial + n * static_cast<std::size_t>(f);
+    filter_line(static_cast<Filter>(f), raw, above, n, bpp, t);
+    std::uint64_t sum = 0;
+    for (std::size_t i = 0; i < n; ++i) sum += static_cast<std::uint64_t>(std::abs(static_cast<std::int8_t>(t[i])));
+    if (sum < best_sum) {
+      best_sum = sum;
+      best = static_cast<Filter>(f);
+    }
   }
-  png_set_write_fn(png, &job, append_bytes, nullptr);
-  // platform-debian12.md §6: zlib level 1 + the Up filter is ~7x faster than the defaults.
-  png_set_compression_level(png, 1);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(job.width), static_cast<png_uint_32>(job.height),
-               job.bit_depth, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_BASE,
-               PNG_FILTER_TYPE_BASE);
-  set_legacy_colour(png, info, job.legacy);
-  set_unknown_chunks(png, info, job);
-  png_write_info(png, info);
-  for (int y = 0; y < job.height; ++y) {
-    job.rows.fill(y, job.row.data());
-    png_write_row(png, job.row.data());
+  std::memcpy(out, trial + n * static_cast<std::size_t>(best), n);
+  return best;
+}
+
+// ---- writing: the image data on every core ----------------------------------------------
+// The filtered scan lines (PNG §7.2: a filter-type byte, then the filtered line) are cut into
+// segments of whole lines, each deflated on its own as part of one zlib stream
+// (io/zlib_stream.hpp) and written as its own IDAT chunk (§11.2.4: the IDATs' data,
+// concatenated, is the stream). The segments depend on the image size only, so the file is
+// the same whatever the thread count.
+
+constexpr std::size_t kSegmentBytes = std::size_t{1} << 20;  // ~2-5 ms of work: even load, small flush overhead
+
+// Filters by level (docs/dump-format.md "PNG compression", measured on hdrd's frames of the
+// EXR fixtures): none when storing; Sub on every line for the fast levels (1-2 % smaller
+// than Up on photographs, the same single subtraction); for the small-file levels the
+// per-line choice of §12.8 (1-5 % smaller than Sub, five filters' work per line).
+std::optional<Filter> filter_for(int level) {
+  if (level == 0) return Filter::none;
+  if (level <= 3) return Filter::sub;
+  return std::nullopt;  // adaptive
+}
+
+struct Segments {
+  int rows_per_segment = 1;
+  int count = 0;
+  int dictionary_rows = 0;  // rows before a segment that fill the deflate window
+};
+
+Segments plan_segments(const PngWriteJob& job) {
+  const std::size_t line = job.row_bytes() + 1;
+  Segments s;
+  s.rows_per_segment = static_cast<int>(std::clamp<std::size_t>(kSegmentBytes / line, 1, static_cast<std::size_t>(job.height)));
+  s.count = (job.height + s.rows_per_segment - 1) / s.rows_per_segment;
+  s.dictionary_rows = static_cast<int>((detail::kDeflateWindowBytes + line - 1) / line);
+  return s;
+}
+
+// One thread's buffers: two raw lines, five trial lines, and the filtered lines of a
+// segment with its dictionary.
+struct SegmentScratch {
+  std::vector<std::uint8_t> above, raw, trial, filtered;
+};
+
+// Filters lines [y_begin, y_end) into scratch.filtered, each with its filter-type byte.
+void filter_lines(const PngWriteJob& job, int y_begin, int y_end, SegmentScratch& s) {
+  const std::size_t n = job.row_bytes(), line = n + 1;
+  const std::optional<Filter> fixed = filter_for(job.options.level);
+  const bool needs_above = !fixed;  // None and Sub read only the line itself
+  s.filtered.resize(line * static_cast<std::size_t>(y_end - y_begin));
+  s.above.assign(n, 0);  // §9.2: the line above the first is all zeros
+  s.raw.resize(n);
+  if (!fixed) s.trial.resize(5 * n);
+  if (y_begin > 0 && needs_above) job.rows.fill(y_begin - 1, s.above.data());
+  for (int y = y_begin; y < y_end; ++y) {
+    std::uint8_t* out = s.filtered.data() + line * static_cast<std::size_t>(y - y_begin);
+    job.rows.fill(y, s.raw.data());
+    if (fixed) {
+      out[0] = static_cast<std::uint8_t>(*fixed);
+      filter_line(*fixed, s.raw.data(), s.above.data(), n, job.pixel_bytes(), out + 1);
+    } else {
+      out[0] = static_cast<std::uint8_t>(
+          adaptive_filter_line(s.raw.data(), s.above.data(), n, job.pixel_bytes(), s.trial.data(), out + 1));
+    }
+    if (needs_above) s.above.swap(s.raw);
   }
-  png_write_end(png, info);
-  png_destroy_write_struct(&png, &info);
-  return true;
+}
+
+struct SegmentOut {
+  std::vector<std::uint8_t> chunk;  // length, "IDAT", data and (but for the last) CRC
+  std::uint32_t adler = 1;          // of the segment's filtered bytes
+  std::size_t raw_bytes = 0;
+};
+
+Result<void> compress_segment(const PngWriteJob& job, const Segments& plan, int index, SegmentScratch& scratch,
+                              detail::SegmentDeflater& deflater, SegmentOut& out) {
+  const int y0 = index * plan.rows_per_segment, y1 = std::min(job.height, y0 + plan.rows_per_segment);
+  const int ya = std::max(0, y0 - plan.dictionary_rows);
+  filter_lines(job, ya, y1, scratch);
+  const std::size_t dict_bytes = (job.row_bytes() + 1) * static_cast<std::size_t>(y0 - ya);
+  const std::span<const std::uint8_t> all(scratch.filtered);
+  const auto data = all.subspan(dict_bytes);
+  out.chunk.clear();
+  out.chunk.reserve(data.size() + data.size() / 16 + 64);
+  out.chunk.insert(out.chunk.end(), {0, 0, 0, 0, 'I', 'D', 'A', 'T'});
+  if (index == 0) {
+    const auto header = detail::zlib_header(job.options.level);
+    out.chunk.insert(out.chunk.end(), header.begin(), header.end());
+  }
+  const bool last = index == plan.count - 1;
+  if (auto ok = deflater.deflate(all.first(dict_bytes), data, last, out.chunk); !ok) return ok;
+  out.adler = detail::adler32(data);
+  out.raw_bytes = data.size();
+  if (!last) {  // the last chunk is closed once the stream's Adler-32 is known
+    const auto length = static_cast<std::uint32_t>(out.chunk.size() - 8);
+    for (int i = 0; i < 4; ++i) out.chunk[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(length >> (24 - 8 * i));
+    put_u32(out.chunk, crc32_of(std::span(out.chunk).subspan(4)));
+  }
+  return {};
+}
+
+// Segments handed out dynamically to `threads` workers (the caller is one of them).
+Result<std::vector<SegmentOut>> compress_image(const PngWriteJob& job) {
+  const Segments plan = plan_segments(job);
+  std::vector<SegmentOut> segments(static_cast<std::size_t>(plan.count));
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = std::clamp(job.options.threads > 0 ? job.options.threads : hw, 1, plan.count);
+  std::atomic<int> next{0};
+  std::vector<std::optional<Error>> failures(static_cast<std::size_t>(threads));
+  auto worker = [&](int w) {
+    try {
+      SegmentScratch scratch;
+      detail::SegmentDeflater deflater(job.options.level);
+      for (int i = next.fetch_add(1); i < plan.count; i = next.fetch_add(1))
+        if (auto ok = compress_segment(job, plan, i, scratch, deflater, segments[static_cast<std::size_t>(i)]); !ok) {
+          failures[static_cast<std::size_t>(w)] = ok.error();
+          next = plan.count;  // the others stop at their next segment
+        }
+    } catch (const std::bad_alloc&) {
+      failures[static_cast<std::size_t>(w)] = make_error("png.write", "cannot encode PNG: out of memory");
+      next = plan.count;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < threads; ++w) pool.emplace_back(worker, w);
+  worker(0);
+  for (auto& t : pool) t.join();
+  for (auto& f : failures)
+    if (f) return *f;
+  return segments;
+}
+
+// The last IDAT gets the stream's Adler-32 (RFC 1950 §2.2, big-endian), its length and CRC.
+void close_stream(std::vector<SegmentOut>& segments) {
+  std::uint32_t adler = segments.front().adler;
+  for (std::size_t i = 1; i < segments.size(); ++i)
+    adler = detail::adler32_combine(adler, segments[i].adler, segments[i].raw_bytes);
+  auto& chunk = segments.back().chunk;
+  put_u32(chunk, adler);
+  const auto length = static_cast<std::uint32_t>(chunk.size() - 8);
+  for (int i = 0; i < 4; ++i) chunk[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(length >> (24 - 8 * i));
+  put_u32(chunk, crc32_of(std::span(chunk).subspan(4)));
+}
+
+Result<std::vector<std::uint8_t>> run_png_write(const PngWriteJob& job) {
+  auto segments = compress_image(job);
+  if (!segments) return segments.error();
+  close_stream(*segments);
+  std::vector<std::uint8_t> out;
+  std::size_t total = 256 + job.mdcv.size() + job.clli.size();
+  for (const auto& s : *segments) total += s.chunk.size();
+  out.reserve(total);
+  put_header_chunks(out, job);
+  for (const auto& s : *segments) out.insert(out.end(), s.chunk.begin(), s.chunk.end());
+  put_chunk(out, "IEND", {});
+  return out;
 }
 
 }  // namespace
 
-Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame) {
+Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame, const PngOptions& options) {
   if (frame.target.mode == Mode::scrgb)
     return make_error("png.unsupported", "scrgb has no PNG form (PNG cannot hold FP16 scRGB); use exr or raw",
                       "format");
+  if (auto ok = check_png_options(options); !ok) return ok.error();
   if (auto ok = detail::check_frame(frame); !ok) return ok.error();
   PngWriteJob job;
   job.width = frame.width;
   job.height = frame.height;
+  job.options = options;
   job.rows.frame = &frame;
   job.rows.sixteen = frame.drm_fourcc != kDrmFormatXrgb8888;
+  job.rows.narrow = frame.target.range == Range::narrow;
   job.bit_depth = job.rows.sixteen ? 16 : 8;
   job.cicp = cicp_for(frame.target);
   const Mode mode = frame.target.mode;
@@ -217,18 +417,29 @@ Result<std::vector<std::uint8_t>> encode_png(const EncodedFrame& frame) {
   } else {
     job.legacy = PngWriteJob::Legacy::bt1886;
   }
-  job.row.resize(static_cast<std::size_t>(frame.width) * 3 * (job.bit_depth / 8));
-  job.out.reserve(static_cast<std::size_t>(frame.width) * frame.height * (job.bit_depth / 8) * 3 / 2);
-  if (!run_png_write(job))
-    return make_error("png.write", fmt::format("cannot encode PNG: {}",
-                                               job.error.message.empty() ? "libpng failed" : job.error.message));
-  return std::move(job.out);
+  try {
+    return run_png_write(job);
+  } catch (const std::bad_alloc&) {
+    return make_error("png.write", "cannot encode PNG: out of memory");
+  }
 }
 
-Result<void> write_png(const fs::path& path, const EncodedFrame& frame) {
-  auto bytes = encode_png(frame);
+Result<void> check_png_options(const PngOptions& options) {
+  if (options.level < kMinPngLevel || options.level > kMaxPngLevel)
+    return make_error("png.level", fmt::format("PNG level {} is out of range ({} stored .. {} smallest)", options.level,
+                                               kMinPngLevel, kMaxPngLevel),
+                      "png_level");
+  if (options.threads < 0)
+    return make_error("png.threads", fmt::format("PNG threads {} is negative (0 = every core)", options.threads),
+                      "threads");
+  return {};
+}
+
+Result<void> write_png(const fs::path& path, const EncodedFrame& frame, const PngOptions& options,
+                       const WriteOptions& write) {
+  auto bytes = encode_png(frame, options);
   if (!bytes) return bytes.error();
-  return atomic_write(path, *bytes);
+  return atomic_write(path, *bytes, write);
 }
 
 // ---- reading ----------------------------------------------------------------------------

@@ -2,9 +2,12 @@
 // documented sidecar key, EXR dumps checked with OpenEXR's own reader, and all-or-nothing
 // behaviour when any part fails.
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <fstream>
 #include <set>
+
+#include <sys/resource.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -237,6 +240,62 @@ TEST(WriteDumps, FailuresLeaveNothingBehind) {
   EXPECT_EQ(r.error().code, "io.write");
   EXPECT_EQ(listing(tmp.path()), (std::set<std::string>{"plain-file", "e.raw"}));
   EXPECT_EQ(listing(tmp / "e.raw"), (std::set<std::string>{"keep"}));
+}
+
+// Failures injected after some files are already staged: the EXR cannot be produced while
+// the raw file and the PNG are done; a write runs out of room (RLIMIT_FSIZE makes write(2)
+// fail with EFBIG, as a full disk fails with ENOSPC) after the raw file was written.
+TEST(WriteDumps, FailuresAfterOtherFilesWereStagedLeaveNothing) {
+  TempDir tmp;
+  EncodedFrame f = frame_for(Mode::hdr10, 64, 64);
+  f.display_nits.reset();
+  auto r = write_dumps(f, tmp / "a", {DumpFormat::raw, DumpFormat::png, DumpFormat::exr});
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "dump.exr");
+  EXPECT_TRUE(listing(tmp.path()).empty());
+
+  f = frame_for(Mode::hdr10, 64, 64);  // raw 17 408 bytes; the PNG of noise codes ~25 000
+  std::uint32_t lcg = 1;
+  for (auto& b : f.data) b = static_cast<std::uint8_t>((lcg = lcg * 1664525u + 1013904223u) >> 24);
+  const auto png = encode_png(f);
+  ASSERT_GT(png->size(), 20000u);
+  ASSERT_LT(f.data.size(), 20000u);
+  rlimit saved{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit small = saved;
+  small.rlim_cur = 20000;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  r = write_dumps(f, tmp / "b", {DumpFormat::raw, DumpFormat::png});
+  const auto single = write_png(tmp / "c.png", f);
+  setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, old_handler);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "io.write");
+  EXPECT_NE(r.error().message.find("b.png"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("File too large"), std::string::npos) << r.error().message;
+  ASSERT_FALSE(single.ok());
+  EXPECT_TRUE(listing(tmp.path()).empty());
+
+  const auto bad_level = write_dumps(f, tmp / "d", {}, {}, {.png = {.level = 12}, .write = {}});
+  ASSERT_FALSE(bad_level.ok());
+  EXPECT_EQ(bad_level.error().code, "png.level");
+  EXPECT_TRUE(listing(tmp.path()).empty());
+}
+
+// durable: the same files (fsync changes when they reach the disk, not what they hold).
+TEST(WriteDumps, DurableWritesTheSameFiles) {
+  TempDir tmp;
+  const EncodedFrame f = frame_for(Mode::hdr10);
+  ASSERT_TRUE(write_dumps(f, tmp / "fast", {}).ok());
+  const auto r = write_dumps(f, tmp / "safe", {}, {}, {.png = {}, .write = {.durable = true}});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  for (const char* ext : {".png", ".exr", ".raw"})
+    EXPECT_EQ(testing::read_file(tmp / (std::string("safe") + ext)), testing::read_file(tmp / (std::string("fast") + ext)))
+        << ext;
+  ASSERT_TRUE(atomic_write(tmp / "x.bin", f.data, {.durable = true}).ok());
+  EXPECT_EQ(testing::read_file(tmp / "x.bin"), std::string(f.data.begin(), f.data.end()));
+  EXPECT_EQ(listing(tmp.path()).size(), 9u);  // 2 x (png, exr, raw, json) + x.bin: no temporaries
 }
 
 TEST(AtomicWrite, ReplacesAndNeverTruncates) {
