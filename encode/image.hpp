@@ -51,4 +51,9 @@ struct OverlayImage {
   bool premultiplied = false;
 };
 
+// IEEE binary16 <-> float, the one scalar conversion (the SIMD kernel has its own vector
+// form, tested against this): round to nearest even, overflow to Inf, NaN kept NaN.
+std::uint16_t float_to_half(float f);
+float half_to_float(std::uint16_t h);
+
 }  // namespace hdrd

@@ -35,23 +35,6 @@ int mip_levels(int w, int h) {
   return levels;
 }
 
-// IEEE binary16 bits of a float in [0, 1], rounded to nearest even.
-std::uint16_t half_bits(float f) {
-  std::uint32_t x;
-  std::memcpy(&x, &f, 4);
-  const std::uint32_t sign = (x >> 16) & 0x8000u;
-  const int exp = static_cast<int>((x >> 23) & 0xff) - 127 + 15;
-  std::uint32_t mant = x & 0x7fffffu;
-  if (exp <= 0) {  // subnormal half
-    if (exp < -10) return static_cast<std::uint16_t>(sign);
-    mant |= 0x800000u;
-    const int shift = 14 - exp;
-    const std::uint32_t half = mant >> shift, rest = mant & ((1u << shift) - 1), mid = 1u << (shift - 1);
-    return static_cast<std::uint16_t>(sign | (half + (rest > mid || (rest == mid && (half & 1)))));
-  }
-  const std::uint32_t base = (static_cast<std::uint32_t>(exp) << 10) | (mant >> 13), rest = mant & 0x1fffu;
-  return static_cast<std::uint16_t>(sign | (base + (rest > 0x1000u || (rest == 0x1000u && (base & 1)))));
-}
 
 // sRGB-encoded texels, decoded on the CPU with the IEC 61966-2-1 curve (encode/transfer)
 // into correctly rounded halves: llvmpipe's GL_SRGB8_ALPHA8 sampler approximates the
@@ -59,8 +42,8 @@ std::uint16_t half_bits(float f) {
 std::vector<std::uint16_t> decode_srgb_to_half(const Texture& t) {
   std::array<std::uint16_t, 256> colour{}, alpha{};
   for (int i = 0; i < 256; ++i) {
-    colour[i] = half_bits(static_cast<float>(transfer::srgb_eotf(i / 255.0)));
-    alpha[i] = half_bits(static_cast<float>(i / 255.0));
+    colour[i] = float_to_half(static_cast<float>(transfer::srgb_eotf(i / 255.0)));
+    alpha[i] = float_to_half(static_cast<float>(i / 255.0));
   }
   std::vector<std::uint16_t> out(t.rgba8.size());
   for (std::size_t i = 0; i < t.rgba8.size(); ++i) out[i] = (i % 4 == 3 ? alpha : colour)[t.rgba8[i]];

@@ -243,8 +243,5 @@ class Applier3D {
 // Name of the SIMD target the kernel runs on here ("AVX3", "AVX2", "SSE4", ...).
 std::string simd_target_name();
 
-// Runs fn(begin, end) over [0, count) split into `threads` parts (0 = hardware threads).
-void parallel_for(std::size_t count, int threads, std::size_t min_chunk,
-                  const std::function<void(std::size_t, std::size_t)>& fn);
 
 }  // namespace hdrd::lut

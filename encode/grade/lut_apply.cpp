@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "encode/grade/lut.hpp"
+#include "encode/parallel.hpp"
 
 #ifndef HDRD_LUT_APPLY_ARGS
 #define HDRD_LUT_APPLY_ARGS
@@ -247,22 +248,6 @@ std::string simd_target_name() {
   return targets.empty() ? "none" : hwy::TargetName(targets.front());
 }
 
-void parallel_for(std::size_t count, int threads, std::size_t min_chunk,
-                  const std::function<void(std::size_t, std::size_t)>& fn) {
-  std::size_t parts = threads > 0 ? std::size_t(threads) : std::max(1u, std::thread::hardware_concurrency());
-  parts = std::max<std::size_t>(1, std::min(parts, count / std::max<std::size_t>(min_chunk, 1)));
-  if (parts <= 1) {
-    if (count > 0) fn(0, count);
-    return;
-  }
-  // Chunk edges on 64-item boundaries keep each thread's writes on its own cache lines.
-  const std::size_t step = ((count + parts - 1) / parts + 63) / 64 * 64;
-  std::vector<std::thread> pool;
-  for (std::size_t begin = step; begin < count; begin += step)
-    pool.emplace_back(fn, begin, std::min(count, begin + step));
-  fn(0, std::min(count, step));
-  for (auto& t : pool) t.join();
-}
 
 }  // namespace hdrd::lut
 #endif  // HWY_ONCE

@@ -14,6 +14,7 @@
 
 #include "encode/colour/color.hpp"
 #include "encode/tone/tonemap.hpp"
+#include "encode/parallel.hpp"
 
 namespace OCIO = OCIO_NAMESPACE;
 
@@ -78,7 +79,7 @@ lut::Rgb Processor::apply(lut::Rgb rgb) const {
 }
 
 void Processor::apply_rgba(float* rgba, std::size_t pixels, int threads) const {
-  lut::parallel_for(pixels, threads, 1 << 14, [&](std::size_t begin, std::size_t end) {
+  parallel_for(pixels, threads, 1 << 14, [&](std::size_t begin, std::size_t end) {
     OCIO::PackedImageDesc desc(rgba + 4 * begin, static_cast<long>(end - begin), 1, 4);
     impl_->cpu->apply(desc);
   });

@@ -31,6 +31,7 @@
 #include <Imath/half.h>
 
 #include "encode/io/io.hpp"
+#include "encode/parallel.hpp"
 
 namespace hdrd::io {
 namespace fs = std::filesystem;
@@ -741,9 +742,7 @@ Result<void> check_pixels(const Pixels& image) {
 ImageHalf to_half(const Image& image, float rgb_scale, int threads) {
   ImageHalf out(image.width, image.height);
   const std::size_t n = image.pixel_count();
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int parts = static_cast<int>(std::clamp<std::size_t>(n / 65536, 1, static_cast<std::size_t>(threads > 0 ? threads : hw)));
-  const auto convert = [&](std::size_t begin, std::size_t end) {
+  parallel_for(n, threads, 65536, [&](std::size_t begin, std::size_t end) {
     const float* in = image.rgba.data();
     std::uint16_t* o = out.rgba.data();
     for (std::size_t i = begin * 4; i < end * 4; i += 4) {
@@ -751,11 +750,7 @@ ImageHalf to_half(const Image& image, float rgb_scale, int threads) {
       for (int c = 0; c < 3; ++c) o[i + c] = half(in[i + c] * rgb_scale).bits();
       o[i + 3] = half(in[i + 3]).bits();
     }
-  };
-  std::vector<std::thread> pool;
-  for (int p = 1; p < parts; ++p) pool.emplace_back(convert, n * p / parts, n * (p + 1) / parts);
-  convert(0, n / parts);
-  for (auto& t : pool) t.join();
+  });
   return out;
 }
 

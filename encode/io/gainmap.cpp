@@ -13,6 +13,7 @@
 #include "encode/grade/lut.hpp"
 #include "encode/io/internal.hpp"
 #include "encode/io/stills.hpp"
+#include "encode/parallel.hpp"
 
 namespace hdrd::io {
 namespace {
@@ -107,7 +108,7 @@ LogGains log_gains(const EncodedFrame& sdr, std::span<const std::uint8_t> sdr_rg
   g.log2_gain.resize(static_cast<std::size_t>(g.width) * g.height * g.channels);
   const auto sdr_lin = sdr_table(sdr.target);
   const HdrLight hdr_light(hdr.target);
-  lut::parallel_for(static_cast<std::size_t>(g.height), 0, 4, [&](std::size_t y0, std::size_t y1) {
+  parallel_for(static_cast<std::size_t>(g.height), 0, 4, [&](std::size_t y0, std::size_t y1) {
     for (int my = static_cast<int>(y0); my < static_cast<int>(y1); ++my)
       for (int mx = 0; mx < g.width; ++mx) {
         color::Vec3 sum_sdr, sum_hdr;

@@ -25,6 +25,7 @@
 #include "encode/io/internal.hpp"
 #include "encode/io/signal_metadata.hpp"
 #include "encode/io/zlib_stream.hpp"
+#include "encode/parallel.hpp"
 
 namespace hdrd::io {
 namespace fs = std::filesystem;
@@ -334,12 +335,11 @@ Result<void> compress_segment(const PngWriteJob& job, const Segments& plan, int 
   return {};
 }
 
-// Segments handed out dynamically to `threads` workers (the caller is one of them).
+// Segments handed out dynamically to `threads` runners of the shared pool (the caller is one).
 Result<std::vector<SegmentOut>> compress_image(const PngWriteJob& job) {
   const Segments plan = plan_segments(job);
   std::vector<SegmentOut> segments(static_cast<std::size_t>(plan.count));
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int threads = std::clamp(job.options.threads > 0 ? job.options.threads : hw, 1, plan.count);
+  const int threads = std::clamp(job.options.threads > 0 ? job.options.threads : hardware_threads(), 1, plan.count);
   std::atomic<int> next{0};
   std::vector<std::optional<Error>> failures(static_cast<std::size_t>(threads));
   auto worker = [&](int w) {
@@ -356,10 +356,7 @@ Result<std::vector<SegmentOut>> compress_image(const PngWriteJob& job) {
       next = plan.count;
     }
   };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < threads; ++w) pool.emplace_back(worker, w);
-  worker(0);
-  for (auto& t : pool) t.join();
+  parallel_run(threads, worker);  // the shared pool (encode/parallel.hpp)
   for (auto& f : failures)
     if (f) return *f;
   return segments;

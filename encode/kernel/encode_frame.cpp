@@ -10,7 +10,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <thread>
 #include <vector>
 
 #include "encode/kernel/fast_fused.hpp"
@@ -18,6 +17,7 @@
 #include "encode/kernel/float_lut.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/kernel/pipeline_internal.hpp"
+#include "encode/parallel.hpp"
 #include "encode/colour/transfer.hpp"
 
 namespace hdrd {
@@ -315,7 +315,7 @@ float to_volume(const FrameJob& job, const SignalStage& s, float* px) {
   for (int c = 0; c < 3; ++c) px[c] = std::clamp(px[c], 0.0f, peak);
   float k = 0;
   auto scale = [&] {
-    const float yd = 0.2627f * px[0] + 0.6780f * px[1] + 0.0593f * px[2];
+    const float yd = kernel::rec2020_luminance(px[0], px[1], px[2]);
     return yd > 0 ? std::pow(yd / s.hlg_peak, (1 - s.hlg_gamma) / s.hlg_gamma) / s.hlg_peak : 0.0f;
   };
   auto put = [&](Vec3 v) {
@@ -352,12 +352,13 @@ void stage_encode(const FrameJob& job, int y, int x0, int n, float* row, Content
     const Mat3f to2020(color::rgb_to_rgb(color::kRec709, color::kRec2020));
     for (int x = 0; x < n; ++x) {
       const float* px = row + x * 4;
-      for (int c = 0; c < 3; ++c) o[x * 4 + c] = detail::float_to_half(px[c] * (1.0f / 80.0f));
+      for (int c = 0; c < 3; ++c) o[x * 4 + c] = detail::float_to_half(px[c] * kernel::kInvScrgbUnitNits);
       o[x * 4 + 3] = 0x3C00;  // alpha 1.0
       // MaxCLL of the Rec.2020 signal the scRGB frame would be sent as (REFERENCE.md §6).
       const float* m = to2020.m;
-      const float r = detail::half_to_float(o[x * 4]) * 80, g = detail::half_to_float(o[x * 4 + 1]) * 80,
-                  b = detail::half_to_float(o[x * 4 + 2]) * 80;
+      const float r = detail::half_to_float(o[x * 4]) * kernel::kScrgbUnitNits,
+                  g = detail::half_to_float(o[x * 4 + 1]) * kernel::kScrgbUnitNits,
+                  b = detail::half_to_float(o[x * 4 + 2]) * kernel::kScrgbUnitNits;
       const float mx = std::max({m[0] * r + m[1] * g + m[2] * b, m[3] * r + m[4] * g + m[5] * b,
                                  m[6] * r + m[7] * g + m[8] * b, 0.0f});
       cll.max_nits = std::max<double>(cll.max_nits, mx);
@@ -383,7 +384,7 @@ void stage_encode(const FrameJob& job, int y, int x0, int n, float* row, Content
       const float v = std::clamp(e[c], 0.0f, 1.0f);
       code[c] = std::clamp(static_cast<int>(v * s.code_scale + s.code_offset + bias), 0, s.max_code);
       if (s16) {
-        const float v16 = narrow ? code[c] * (65535.0f / 1023.0f) : v * 65535.0f;
+        const float v16 = narrow ? code[c] * kernel::kCode10To16 : v * kernel::kMax16;
         s16[x * 3 + c] = static_cast<std::uint16_t>(std::lround(v16));
       }
     }
@@ -617,11 +618,10 @@ Result<void> encode_prepared_into(const SceneInput& in, const PreparedPipeline& 
   job.fused = fused_template(job);
   job.fused_ui = job.fused && ui.active() && !ui.srgb_blend && job.fused->out_kind != kernels::FusedOut::scrgb;
 
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hw, 1, std::max(1, h));
+  const int threads = std::clamp(p.settings.threads > 0 ? p.settings.threads : hardware_threads(), 1, std::max(1, h));
   std::vector<ContentLightAccumulator> cll(static_cast<std::size_t>(threads));
   // Bands of rows handed out dynamically so a slow band (gamut mapping, UI) doesn't stall
-  // others; the calling thread is one of the workers.
+  // others; the calling thread is one of the workers (the shared pool, encode/parallel.hpp).
   constexpr int kBand = 16;
   std::atomic<int> next{0};
   auto worker = [&](int i) {
@@ -629,10 +629,7 @@ Result<void> encode_prepared_into(const SceneInput& in, const PreparedPipeline& 
     for (int y0 = next.fetch_add(kBand); y0 < h; y0 = next.fetch_add(kBand))
       run_rows(job, y0, std::min(h, y0 + kBand), cll[static_cast<std::size_t>(i)], scratch);
   };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker, i);
-  worker(0);
-  for (auto& th : pool) th.join();
+  parallel_run(threads, worker);
   double max_nits = 0, sum = 0;
   for (const auto& c : cll) {
     max_nits = std::max(max_nits, c.max_nits);

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cstring>
 
+#include "encode/kernel/constants.hpp"
 #include "encode/kernel/fast_fused.hpp"
 #include "encode/kernel/float_lut.hpp"
 
@@ -283,8 +284,8 @@ HWY_INLINE void tone(DF df, const Spec& spec, const FusedRow& r, const MatV& m_c
     default: {
       VF k = spec.tone() == FusedTone::ratio_max
                        ? hn::Max(hn::Max(R, G), B)
-                       : hn::MulAdd(hn::Set(df, 0.2627f), R,
-                                    hn::MulAdd(hn::Set(df, 0.6780f), G, hn::Mul(hn::Set(df, 0.0593f), B)));
+                       : hn::MulAdd(hn::Set(df, kernel::kLumaR), R,
+                                    hn::MulAdd(hn::Set(df, kernel::kLumaG), G, hn::Mul(hn::Set(df, kernel::kLumaB), B)));
       if (spec.tone() == FusedTone::ratio_max && spec.container()) {
         // The largest channel in the output container too, so no output channel passes the peak.
         VF cr = R, cg = G, cb = B;
@@ -390,7 +391,7 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
   if (spec.out() == FusedOut::scrgb) {
     const hn::Rebind<std::uint16_t, DF> du16;
     const hn::Rebind<hwy::float16_t, DF> dh;
-    const VF k80 = hn::Set(df, 1.0f / 80.0f);
+    const VF k80 = hn::Set(df, kernel::kInvScrgbUnitNits);
     for (int x = 0; x < n_full; x += N) {
       VF R, G, B, work_max;
       const auto ok = container_light(df, spec, r, mats, x, R, G, B, work_max);
@@ -453,9 +454,9 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
         if (spec.signal16()) {
           // PNG samples: round(E' 65535), or the narrow code scaled to 16 bits.
           const hn::Rebind<std::uint16_t, DF> du16;
-          const VF k16 = hn::Set(df, 65535.0f), half = hn::Set(df, 0.5f);
+          const VF k16 = hn::Set(df, kernel::kMax16), half = hn::Set(df, 0.5f);
           auto s16 = [&](VF v, hn::Vec<DI> c) {
-            const VF u = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, 65535.0f / 1023.0f), half)
+            const VF u = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, kernel::kCode10To16), half)
                                   : hn::MulAdd(e_of(v), k16, half);
             return hn::DemoteTo(du16, hn::ConvertTo(di, u));
           };

@@ -40,7 +40,7 @@ void tone_clip(float* row, int n, float paper_white, float peak) {
 void tone_ratio(float* row, int n, const FloatBitsLut& lut, bool luminance, const float* m) {
   for (int i = 0; i < n * 4; i += 4) {
     const float r = std::max(row[i], 0.0f), g = std::max(row[i + 1], 0.0f), b = std::max(row[i + 2], 0.0f);
-    float k = luminance ? 0.2627f * r + 0.6780f * g + 0.0593f * b : std::max({r, g, b});
+    float k = luminance ? kernel::rec2020_luminance(r, g, b) : std::max({r, g, b});
     if (!luminance && m)
       k = std::max({k, m[0] * r + m[1] * g + m[2] * b, m[3] * r + m[4] * g + m[5] * b, m[6] * r + m[7] * g + m[8] * b});
     float ratio = 0;
@@ -59,7 +59,7 @@ void encode_pq_row(const float* row, int n, const FloatBitsLut& pq, float code_s
       code[c] = std::min(static_cast<int>(e * code_scale + code_offset + 0.5f), 1023);
       if (signal16)
         signal16[x * 3 + c] = static_cast<std::uint16_t>(
-            narrow ? static_cast<int>(code[c] * (65535.0f / 1023.0f) + 0.5f) : static_cast<int>(e * 65535.0f + 0.5f));
+            narrow ? static_cast<int>(code[c] * kernel::kCode10To16 + 0.5f) : static_cast<int>(e * kernel::kMax16 + 0.5f));
     }
     out[x] = static_cast<std::uint32_t>(code[0]) | (static_cast<std::uint32_t>(code[1]) << 10) |
              (static_cast<std::uint32_t>(code[2]) << 20) | (3u << 30);

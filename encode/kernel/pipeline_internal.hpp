@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "encode/colour/transfer.hpp"
+#include "encode/kernel/constants.hpp"
 #include "encode/kernel/float_lut.hpp"
 #include "encode/pipeline.hpp"
 
@@ -69,7 +70,7 @@ inline constexpr double kCodeLightFitTolerance = 1e-3;
 // F_D = gain * e with gain = Lw * Ys^(gamma - 1), Ys the Rec.2020 luminance of e
 // (BT.2100 table 5, Lb = 0). Shared by the encoder's MaxCLL and measure_frame_light.
 inline float hlg_ootf_gain(const SignalStage& s, float er, float eg, float eb) {
-  const float ys = 0.2627f * er + 0.6780f * eg + 0.0593f * eb;
+  const float ys = kernel::rec2020_luminance(er, eg, eb);
   return ys > 0 ? s.hlg_peak * std::pow(ys, s.hlg_gamma - 1) : 0.0f;
 }
 
@@ -111,7 +112,7 @@ color::Vec3 displayed_light(color::Vec3 container_nits, const DisplayTarget& t);
 bool has_black_floor(const DisplayTarget& t);
 
 // Converts float <-> IEEE half (round to nearest even).
-std::uint16_t float_to_half(float f);
-float half_to_float(std::uint16_t h);
+using ::hdrd::float_to_half;  // encode/image.hpp
+using ::hdrd::half_to_float;
 
 }  // namespace hdrd::detail

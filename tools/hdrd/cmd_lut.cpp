@@ -9,6 +9,7 @@
 #include "encode/grade/grade.hpp"
 #include "encode/io/io.hpp"
 #include "encode/grade/lut.hpp"
+#include "encode/parallel.hpp"
 #include "encode/grade/ocio.hpp"
 #include "encode/tone/tonemap.hpp"
 #include "tools/hdrd/command.hpp"
@@ -237,7 +238,7 @@ void run_apply(const ApplyOptions& o) {
     p[0] = float(w.x), p[1] = float(w.y), p[2] = float(w.z);
   }
   const std::size_t row = std::size_t(img.width);
-  lut::parallel_for(std::size_t(img.height), 0, 8, [&](std::size_t y0, std::size_t y1) {
+  parallel_for(std::size_t(img.height), 0, 8, [&](std::size_t y0, std::size_t y1) {
     g->apply(img.rgba.data() + 4 * row * y0, row * (y1 - y0));
   });
   io::ExrWriteOptions wo;

@@ -1,6 +1,9 @@
 // The GPU program description (no GL here; tests/shading runs it on llvmpipe).
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
+#include "encode/kernel/constants.hpp"
 #include "encode/kernel/gpu_program.hpp"
 
 using namespace hdrd;
@@ -36,6 +39,25 @@ TEST(GpuProgram, TablesAreTheCpuTablesAndFitATextureRow) {
     // mat3 column 0 = first column of (to_working * scene_scale).
     EXPECT_FLOAT_EQ(prog.uniforms.m_in[1], static_cast<float>(p.input_to_working.m[1][0] * p.scene_scale));
   }
+}
+
+// The program takes its constants from the colour code (encode/kernel/constants.hpp): the
+// Rec.2020 luminance weights, scRGB's 80 cd/m2 and the 16-bit scale are printed once, at
+// full float precision, and never written as literals in the generated code.
+TEST(GpuProgram, ConstantsComeFromTheColourCode) {
+  Image img(2, 2);
+  for (Mode m : {Mode::hdr10, Mode::hlg, Mode::sdr, Mode::scrgb}) {
+    const auto prog = gpu::make_encode_program(prepare(m, "pq-shoulder", img));
+    ASSERT_TRUE(prog.supported) << prog.unsupported_reason;
+    EXPECT_EQ(prog.glsl.find(kernel::glsl_constants()), prog.glsl.find("const vec3 kLuma")) << "the block, once";
+    for (const char* literal : {"0.2627", "0.6780", "0.0593", "80.0", "1023.0", "65535.0"})
+      EXPECT_EQ(prog.glsl.find(literal), std::string::npos) << literal << " written as a literal in " << to_string(m);
+  }
+  // The block says what the colour code says.
+  const std::string block = kernel::glsl_constants();
+  EXPECT_NE(block.find(fmt::format("{:.9e}", static_cast<float>(color::kRec2020Luma.y))), std::string::npos) << block;
+  EXPECT_NE(block.find(fmt::format("{:.9e}", static_cast<float>(1.0 / transfer::kScrgbUnitNits))), std::string::npos);
+  EXPECT_FLOAT_EQ(kernel::rec2020_luminance(1, 1, 1), 1.0f);
 }
 
 TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
