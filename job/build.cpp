@@ -174,7 +174,8 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
   // The world's light: a map file or the sky (any sky field given), else the scene's own.
   const bool sky = !r.is_null("environment.sky.sun_elevation_deg") || !r.is_null("environment.sky.sun_azimuth_deg") ||
                    !r.is_null("environment.sky.turbidity") || !r.is_null("environment.sky.ground_albedo") ||
-                   !r.is_null("environment.sky.sun");
+                   r.has("environment.sky.sun");
+  const bool sky_sun = r.boolean("environment.sky.sun");
   const std::string env_file = r.text("environment.file");
   const double env_scale = r.number("environment.scale"), env_rotation = r.number("environment.rotation_deg");
   if (sky || !env_file.empty()) {
@@ -186,7 +187,7 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
       p.sun_azimuth_deg = r.optional_number("environment.sky.sun_azimuth_deg").value_or(p.sun_azimuth_deg);
       p.turbidity = r.optional_number("environment.sky.turbidity").value_or(p.turbidity);
       p.ground_albedo = r.optional_number("environment.sky.ground_albedo").value_or(p.ground_albedo);
-      if (!r.is_null("environment.sky.sun")) p.sun = r.boolean("environment.sky.sun");
+      p.sun = sky_sun;
       env.sky = p;
     }
     env.scale = env_scale;

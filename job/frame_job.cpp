@@ -449,7 +449,8 @@ Result<FrameResult> FrameJob::finish() {
   if (!frame) return frame.error();
   if (st.stopped()) return cancelled();
   if (st.wants(&OutputInfo::needs_sdr_rendition)) {
-    if (!st.prepared || !st.cpu_input.image) return make_error("internal", "no scene light for the SDR rendition");
+    if (!st.prepared || (!st.cpu_input.image && !st.cpu_input.half))
+      return make_error("internal", "no scene light for the SDR rendition");
     const auto t1 = Clock::now();
     auto sdr = sdr_rendition(st.cpu_input, *st.prepared);
     if (!sdr) return sdr.error();

@@ -229,7 +229,7 @@ std::vector<Setting> make_table() {
        .default_doc = "0.2 (with a sky)", .flag = "--sky-ground-albedo", .metavar = "A"},
       {.path = "environment.sky.sun", .type = T::boolean, .sources = kRender,
        .doc = "Preetham sky: the sun as a shadowing light and a disc (false: the sky dome only)",
-       .default_doc = "true (with a sky)", .flag = "--no-sky-sun"},
+       .default_json = "true", .flag = "--no-sky-sun"},
       {.path = "energy_compensation", .type = T::boolean, .sources = kRender,
        .doc = "GGX multiple-scattering energy compensation (false: single scattering, for comparison)",
        .default_json = "true", .flag = "--no-energy-compensation", .query = "energy_compensation"},

@@ -154,6 +154,11 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
     return unsupported(fmt::format("tone curve '{}' applied to luminance may leave the gamut; gamut mapping runs "
                                    "on the CPU",
                                    p.curve_info->name));
+  // Rec.2020 working light outside an SDR (Rec.709) container's gamut is mapped in ICtCp on
+  // the CPU (encode_frame.cpp stage_container); this program only clips, which on bright
+  // saturated light (a sky-lit scene's warm highlights) differs by up to ~10 codes.
+  if (t.container() != color::kRec2020 && t.mode != Mode::scrgb && s.gamut == GamutMapping::ictcp)
+    return unsupported("gamut mapping into the Rec.709 container (gamut ictcp) runs on the CPU; gamut clip runs here");
   const auto sig_ptr = detail::cached_signal_stage(t);
   const detail::SignalStage& sig = *sig_ptr;
 

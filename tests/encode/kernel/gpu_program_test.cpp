@@ -16,7 +16,9 @@ PreparedPipeline prepare(Mode m, const std::string& curve, Image& img, const ton
   s.target = default_target(m);
   s.tone.curve = curve;
   s.tone.params = params;
-  s.gamut = gamut;
+  // SDR containers take gamut clip here: ICtCp mapping into Rec.709 runs on the CPU
+  // (GpuProgram.SdrIctcpGamutMappingStaysOnTheCpu).
+  s.gamut = s.target.is_sdr() && gamut == GamutMapping::ictcp ? GamutMapping::clip : gamut;
   SceneInput in;
   in.image = &img;
   return prepare_pipeline(in, s).value();
@@ -58,6 +60,17 @@ TEST(GpuProgram, ConstantsComeFromTheColourCode) {
   EXPECT_NE(block.find(fmt::format("{:.9e}", static_cast<float>(color::kRec2020Luma.y))), std::string::npos) << block;
   EXPECT_NE(block.find(fmt::format("{:.9e}", static_cast<float>(1.0 / transfer::kScrgbUnitNits))), std::string::npos);
   EXPECT_FLOAT_EQ(kernel::rec2020_luminance(1, 1, 1), 1.0f);
+}
+
+TEST(GpuProgram, SdrIctcpGamutMappingStaysOnTheCpu) {
+  Image img(2, 2);
+  EncodeSettings s;
+  s.target = default_target(Mode::sdr);
+  SceneInput in;
+  in.image = &img;
+  const auto prog = gpu::make_encode_program(prepare_pipeline(in, s).value());
+  EXPECT_FALSE(prog.supported);
+  EXPECT_NE(prog.unsupported_reason.find("gamut"), std::string::npos) << prog.unsupported_reason;
 }
 
 TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
