@@ -230,6 +230,42 @@ TEST(FrameJob, StillsAreRefusedWhereTheModeHasNoForm) {
       << pattern_map.error().message;
 }
 
+// The world's light through the request: the sky by any of its fields (or --sky), a map by
+// file; the sidecar's render says what lit the frame; a file and a sky together are refused.
+TEST(FrameJob, EnvironmentFromTheRequest) {
+  auto renderer = shading::Renderer::create();
+  if (!renderer) GTEST_SKIP() << "no GL renderer: " << renderer.error().message;
+  Inputs in;
+  Image env(16, 8);
+  for (auto& v : env.rgba) v = 1.0f;
+  ASSERT_TRUE(io::write_exr(in.dir / "env.exr", env, {}).ok());
+  auto render = [&](json body) {
+    body["width"] = 32, body["height"] = 18, body["samples"] = 1, body["formats"] = {"raw"};
+    auto r = parse_request_json(body, cli_context(Source::render));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    auto job = FrameJob::create(std::move(*r), {});
+    EXPECT_TRUE(job.ok()) << job.error().message;
+    return run_frame_job(**job, renderer->get());
+  };
+  auto sky = render({{"environment", {{"sky", {{"sun_elevation_deg", 30}, {"turbidity", 3}}}}}});
+  ASSERT_TRUE(sky.ok()) << sky.error().message;
+  const std::string lit = sky->frame.settings["render"]["environment"];
+  EXPECT_NE(lit.find("sky"), std::string::npos) << lit;
+  auto map = render({{"environment", {{"file", (in.dir / "env.exr").string()}, {"scale", 500}}},
+                     {"energy_compensation", false}});
+  ASSERT_TRUE(map.ok()) << map.error().message;
+  EXPECT_NE(map->frame.settings["render"]["environment"].get<std::string>().find("env.exr"), std::string::npos)
+      << map->frame.settings["render"].dump();
+  EXPECT_EQ(map->frame.settings["render"]["energy_compensation"], false);
+  auto both = render({{"environment", {{"file", (in.dir / "env.exr").string()}, {"sky", {{"turbidity", 3}}}}}});
+  EXPECT_FALSE(both.ok()) << "a map and a sky together";
+  // The CLI's --sky is the same request.
+  auto flags = cli_to_request_json({{"--sky", "30,0,3"}});
+  ASSERT_TRUE(flags.ok()) << flags.error().message;
+  EXPECT_EQ((*flags)["environment"]["sky"]["sun_elevation_deg"], 30);
+  EXPECT_EQ((*flags)["environment"]["sky"]["turbidity"], 3);
+}
+
 // A render encoded on the GPU still gets its gain map: the scene light is read back for the
 // SDR rendition.
 TEST(FrameJob, RenderGainMap) {
