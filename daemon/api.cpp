@@ -12,6 +12,8 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/api_support.hpp"
+#include "daemon/input_bounds.hpp"
+#include "daemon/memory.hpp"
 #include "daemon/output.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
@@ -321,11 +323,13 @@ void Service::connection_opened(bool tcp, const std::optional<PeerCred>& peer) n
 
 void Service::submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Responder>& responder) {
   const auto deadline = spec.deadline;
+  const auto memory_bytes = spec.memory_bytes;
   Metrics* metrics = &metrics_;
   auto waiter = scheduler_->submit(
       std::move(spec),
-      [responder, metrics](std::shared_ptr<const Reply> reply, bool coalesced) {
+      [responder, metrics, memory_bytes](std::shared_ptr<const Reply> reply, bool coalesced) {
         Reply r = *reply;
+        if (memory_bytes) r.headers.emplace_back("X-Hdrd-Memory-Estimate", std::to_string(memory_bytes));  // memory.hpp
         if (coalesced) {
           r.headers.emplace_back("X-Hdrd-Coalesced", "true");
           ++metrics->coalesced;
@@ -335,8 +339,8 @@ void Service::submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Re
       needs_renderer);
   if (!waiter) {
     Reply r = Reply::error(waiter.error());
-    if (waiter.error().code == "queue.full") {
-      ++metrics_.rejected_full;
+    if (waiter.error().code.rfind("queue.", 0) == 0) {  // queue.full, queue.memory
+      ++(waiter.error().code == "queue.full" ? metrics_.rejected_full : metrics_.rejected_memory);
       r.headers.emplace_back("Retry-After", std::to_string(config()->workers.retry_after_s));
     }
     responder->reply(std::move(r));
@@ -476,6 +480,7 @@ void Service::get_metrics(HttpRequest&, std::shared_ptr<Responder> responder) {
     gauges["hdrd_render_workers_ready"] = s.render_workers_ready;
     gauges["hdrd_encode_threads"] = s.encode_threads;
   }
+  add_resource_gauges(gauges, scheduler_.get(), server_.get());  // metrics.hpp: memory, connections
   if (server_) metrics_.in_flight = server_->open_requests();
   Reply r = Reply::json(200, metrics_.prometheus_text(gauges));
   r.content_type = "text/plain; version=0.0.4; charset=utf-8";
@@ -510,6 +515,9 @@ void Service::post_render(HttpRequest& http, std::shared_ptr<Responder> responde
   JobSpec spec;
   spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
   if (!st->request.dump) spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output));
+  auto memory = estimate_render_memory(st->request, *output, http.body.size(), cfg->limits);  // memory.hpp
+  if (!memory) return responder->reply(Reply::error(memory.error()));
+  spec.memory_bytes = *memory;
   Metrics* metrics = &metrics_;
   spec.render = [st, metrics](RenderResource* res, const JobControl&) { return render_stage(*st, res, *metrics); };
   spec.finish = [st, metrics](const JobControl&) { return render_finish(*st, *metrics); };
@@ -528,25 +536,10 @@ void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responde
       return responder->reply(Reply::error(make_error(
           "request.conflict", "multipart uploads carry their options in the 'request' part, not the query string",
           http.query[0].first.substr(0, 64))));
-    bool have_image = false;
-    for (auto& p : http.parts) {
-      if (p.name == "image" && !have_image) {
-        exr = std::move(p.data);
-        have_image = true;
-      } else if (p.name == "request") {
-        options = json::parse(p.data, nullptr, false);
-        if (options.is_discarded() || !options.is_object())
-          return responder->reply(Reply::error(make_error("request.syntax", "the 'request' part is not a JSON object",
-                                                          "request")));
-      } else {
-        return responder->reply(Reply::error(make_error(
-            "request.unknown_field", fmt::format("multipart part '{}': expected 'image' and 'request'", p.name.substr(0, 64)),
-            p.name.substr(0, 64))));
-      }
-    }
-    if (!have_image)
-      return responder->reply(Reply::error(make_error("request.value", "multipart body has no 'image' part (the EXR)",
-                                                      "image")));
+    auto upload = split_encode_upload(http.parts, cfg->limits);  // input_bounds.hpp: bounded JSON part
+    if (!upload) return responder->reply(Reply::error(upload.error()));
+    options = std::move(upload->options);
+    exr = std::move(upload->exr);
   } else {
     const std::string mt = media_type(http);
     if (mt != "image/x-exr" && mt != "application/octet-stream" && mt != "image/aces")
@@ -578,6 +571,10 @@ void Service::post_encode(HttpRequest& http, std::shared_ptr<Responder> responde
   if (!st->request.dump)
     spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output)) +
                fmt::format("|exr:{}:{:016x}", st->exr.size(), fnv1a(st->exr));
+  const auto* exr_bytes = reinterpret_cast<const std::uint8_t*>(st->exr.data());
+  auto memory = estimate_encode_memory(st->request, *output, {exr_bytes, st->exr.size()}, cfg->limits);  // memory.hpp
+  if (!memory) return responder->reply(Reply::error(memory.error()));
+  spec.memory_bytes = *memory;
   Metrics* metrics = &metrics_;
   spec.finish = [st, metrics](const JobControl& control) { return encode_finish(*st, control, *metrics); };
   submit(std::move(spec), false, responder);

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "daemon/api_support.hpp"
+#include "daemon/memory.hpp"
 #include "daemon/output.hpp"
 #include "daemon/pattern_catalogue.hpp"
 #include "daemon/render_worker.hpp"
@@ -213,6 +214,7 @@ void Service::post_pattern(HttpRequest& http, std::shared_ptr<Responder> respond
   JobSpec spec;
   spec.deadline = request_deadline(http, st->request.timeout_s, *cfg);
   if (!st->request.dump) spec.key = canonical_key(st->request.canonical()) + "|" + std::string(content_type(*output));
+  spec.memory_bytes = estimate_pattern_memory(st->request, *output, http.body.size());  // memory.hpp
   Metrics* metrics = &metrics_;
   spec.finish = [st, metrics](const JobControl&) { return pattern_finish(*st, *metrics); };
   submit(std::move(spec), false, responder);

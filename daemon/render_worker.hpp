@@ -20,6 +20,7 @@ class RendererResource final : public RenderResource {
  public:
   explicit RendererResource(std::unique_ptr<shading::Renderer> r) : renderer(std::move(r)) {}
   nlohmann::json info() const override;
+  void release_large_buffers() override { renderer->release_frame_targets(); }
   std::unique_ptr<shading::Renderer> renderer;
 };
 #endif

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "daemon/input_bounds.hpp"
 #include "daemon/paths.hpp"
 #include "daemon/pattern_catalogue.hpp"
 #include "daemon/text.hpp"
@@ -350,6 +351,7 @@ void parse_ui(Fields& top, Request& r, const ParseContext& ctx) {
   const auto path = f.string("path", 4096);
   const auto b64 = f.string("png_base64", ctx.limits.max_ui_bytes / 3 * 4 + 8);
   if (path && b64) fail("request.conflict", "ui: give path or png_base64, not both", "ui.path");
+  if (b64 && b64->empty()) fail("request.value", "ui.png_base64: empty (a base64 PNG is required)", "ui.png_base64");
   if (!path && !b64) fail("request.value", "ui: needs path (a PNG in the asset root) or png_base64", "ui.path");
   if (path) ui.path = resolve(ctx, *path, "ui.path");
   if (b64) {
@@ -577,25 +579,10 @@ int json_nesting_depth(std::string_view body) {
 
 namespace {
 
-// The body as a JSON object: size, nesting depth and syntax checked in that order.
+// The body as a JSON object: size, nesting depth, NUL bytes and syntax checked by the one
+// bounded parse every entry point uses (input_bounds.hpp).
 Result<json> parse_json_object(std::string_view body, const ParseContext& ctx) {
-  if (body.size() > ctx.limits.max_body_bytes)
-    return make_error("request.limit", fmt::format("request body of {} bytes exceeds the limit of {} bytes",
-                                                   body.size(), ctx.limits.max_body_bytes), "");
-  if (json_nesting_depth(body) > ctx.limits.max_json_depth)
-    return make_error("request.depth", fmt::format("request: JSON nested deeper than {} levels",
-                                                   ctx.limits.max_json_depth), "");
-  json doc;
-  try {
-    doc = json::parse(body.begin(), body.end());
-  } catch (const json::parse_error& e) {
-    return make_error("request.syntax", fmt::format("request body is not valid JSON: {}", e.what()), "");
-  } catch (const json::exception& e) {  // out_of_range.406: a number beyond double's range
-    return make_error("request.value", fmt::format("request body has an unusable value: {}", e.what()), "");
-  }
-  if (!doc.is_object())
-    return make_error("request.type", fmt::format("request: expected a JSON object, got {}", type_name(doc)), "");
-  return doc;
+  return parse_json_object_bounded(body, ctx.limits);
 }
 
 }  // namespace

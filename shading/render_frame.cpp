@@ -390,6 +390,18 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   return out;
 }
 
+void Renderer::release_frame_targets() {
+  CurrentContext current(*context_);
+  if (!current.status()) return;  // no context: nothing can be deleted, nothing was made
+  Impl& r = *impl_;
+  r.targets = Targets{};
+  r.reduced = GlName{};
+  r.reduced_fbo = GlName{};
+  r.reduced_width = r.reduced_height = 0;
+  r.has_frame = false;
+  r.gl->Finish();
+}
+
 Result<Image> Renderer::read_frame() {
   Impl& r = *impl_;
   if (!r.has_frame) return make_error("render.no_frame", "nothing rendered yet");

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "daemon/input_bounds.hpp"
 #include "daemon/output.hpp"
 #include "daemon/paths.hpp"
 #include "daemon/request.hpp"
@@ -131,7 +132,9 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{R"({"width":0})", "request.limit", "width"}, Bad{R"({"width":100000})", "request.limit", "width"},
         Bad{R"({"width":1e300})", "request.limit", "width"},
         Bad{R"({"width":18446744073709551615})", "request.limit", "width"},
-        Bad{R"({"width":1e400})", "request.value", ""},
+        Bad{R"({"width":1e400})", "request.value", "width"},
+        Bad{R"({"display":{"peak_nits":5e551}})", "request.value", "display.peak_nits"},
+        Bad{R"({"ui":{"png_base64":""}})", "request.value", "ui.png_base64"},
         Bad{R"({"width":7680,"height":4320,"samples":1000})", "request.limit", "samples"},
         Bad{R"({"widht":256})", "request.unknown_field", "widht"},
         Bad{R"({"display":{"mode":"hdr10","peak":1000}})", "request.unknown_field", "display.peak"},
@@ -179,6 +182,49 @@ TEST(Request, NestingDepthIsRefusedBeforeParsing) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, "request.depth");
   EXPECT_EQ(json_nesting_depth(R"({"a":"[[[[{{{{","b":[1,[2]]})"), 3) << "brackets inside strings do not count";
+}
+
+// nlohmann's lexer ends its input at a NUL byte: without the bounded parse, what followed
+// one was ignored and the request before it taken as the whole body (issue 14).
+TEST(Request, NulByteInTheBodyIsRefused) {
+  std::string body = R"({"width":64})";
+  body += '\0';
+  body += R"({"height":"not even looked at")";
+  auto r = parse(body);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "request.syntax");
+  EXPECT_NE(r.error().message.find("NUL byte at byte 12"), std::string::npos) << r.error().message;
+}
+
+// Every entry point: the multipart 'request' part is bounded like a body (issue 14: a part
+// nested 100 000 deep crashed the daemon).
+TEST(Request, MultipartRequestPartIsBoundedLikeABody) {
+  Limits limits;
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  std::vector<Part> parts = {{"image", "a.exr", "image/x-exr", "EXR"}, {"request", "", "application/json", deep}};
+  auto up = split_encode_upload(parts, limits);
+  ASSERT_FALSE(up.ok());
+  EXPECT_EQ(up.error().code, "request.depth");
+  EXPECT_EQ(up.error().field, "request");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", std::string("{}\0x", 4)}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.syntax");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", R"({"display":{"peak_nits":1e999}})"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().field, "display.peak_nits");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", "[1]"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.type");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", "{}"}, {"request", "", "", "{}"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.unknown_field") << "one request part";
+  parts = {{"imag\xff", "", "", "EXR"}};
+  auto bad = split_encode_upload(parts, limits);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_TRUE(io::is_valid_utf8(bad.error().field)) << "a field the JSON error body can carry";
+  parts = {{"request", "", "", "{}"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().field, "image");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", R"({"display":{"mode":"hlg"}})"}};
+  auto ok = split_encode_upload(parts, limits);
+  ASSERT_TRUE(ok.ok()) << ok.error().message;
+  EXPECT_EQ(ok->exr, "EXR");
+  EXPECT_EQ(ok->options["display"]["mode"], "hlg");
 }
 
 TEST(Request, TooManyLightsInAnInlineScene) {
@@ -302,6 +348,28 @@ TEST(Query, MapsToTheSameJsonFields) {
   EXPECT_EQ(query_to_request_json({{"peak_nits", "1"}, {"peak_nits", "2"}}).error().code, "request.conflict");
 }
 
+// Query parameters arrive percent-decoded: %ff is a byte that is not UTF-8 and %00 a NUL.
+// Every parameter name, and a value for each, is refused with 400 request.query (issue 14:
+// mode=%ff answered 500 when the JSON library met the string).
+TEST(Query, InvalidUtf8AndNulAreRefusedInEveryParameter) {
+  for (const auto& p : query_params()) {
+    for (const std::string& value : std::vector<std::string>{"\xff", "a\xc0\xaf" "b", std::string("hdr10\0x", 7), "\xed\xa0\x80"}) {
+      auto r = check_query({{std::string(p.name), value}});
+      ASSERT_FALSE(r.ok()) << p.name;
+      EXPECT_EQ(r.error().code, "request.query");
+      EXPECT_EQ(r.error().field, p.name);
+      EXPECT_EQ(http_status(r.error()), 400u);
+    }
+    EXPECT_TRUE(check_query({{std::string(p.name), "1000"}}).ok()) << p.name;
+  }
+  EXPECT_EQ(check_query({{"mo\xff" "de", "hdr10"}}).error().code, "request.query") << "names too";
+  EXPECT_TRUE(io::is_valid_utf8(check_query({{"mo\xff" "de", "x"}}).error().field));
+  std::vector<std::pair<std::string, std::string>> many(kMaxQueryParams + 1, {"mode", "hdr10"});
+  EXPECT_EQ(check_query(many).error().code, "request.query");
+  EXPECT_EQ(check_query({{"name", std::string(kMaxQueryBytes + 1, 'a')}}).error().code, "request.query");
+  EXPECT_TRUE(check_query({{"name", "caf\xc3\xa9"}}).ok()) << "UTF-8 itself is fine";
+}
+
 // ---- Accept (RFC 9110 §12.5.1) ---------------------------------------------------------
 
 TEST(Accept, NegotiatesTheFrameFormat) {
@@ -334,6 +402,10 @@ TEST(WireError, StatusPerCode) {
       {"request.timeout", 504},    {"path.forbidden", 403},        {"path.not_found", 404},
       {"queue.full", 503},         {"server.draining", 503},       {"renderer.unavailable", 503},
       {"exr.truncated", 422},      {"tonemap.unknown", 422},       {"io.write", 500},
+      {"io.no_space", 507},        {"edid.too_short", 422},        {"edid.bad_header", 422},
+      {"file.too_large", 422},     {"request.query", 400},         {"request.length_required", 411},
+      {"request.header_timeout", 408}, {"request.body_timeout", 408}, {"server.busy", 503},
+      {"queue.memory", 503},       {"request.memory", 400},        {"request.depth", 400},
       {"internal", 500},           {"something.new", 500}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   const auto body = nlohmann::json::parse(error_body(make_error("request.type", "width: bad", "width")));
