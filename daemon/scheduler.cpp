@@ -183,7 +183,7 @@ void Scheduler::render_loop(int index) {
       continue;
     }
     auto r = guarded([&] { return job->spec.render(resource.get(), control); });
-    if (resource && job->spec.memory_bytes >= options_.trim_after_bytes) resource->release_large_buffers();
+    if (resource && job->spec.memory_bytes >= options_.trim_after_bytes) resource->release_large_buffers(job->spec.memory_bytes);
     if (!r) {
       finish_job(job, error_reply("internal", "internal error while rendering"));
     } else if (!r->ok()) {

@@ -53,7 +53,7 @@ class RenderResource {
   virtual nlohmann::json info() const = 0;  // backend, GL_RENDERER, ...
   // After a job whose estimate reached SchedulerOptions::trim_after_bytes, on the worker's
   // thread: give back what the resource keeps for the next job (a large frame's targets).
-  virtual void release_large_buffers() {}
+  virtual void release_large_buffers(std::uint64_t /*job_memory_bytes*/) {}
 };
 using RenderResourceFactory = std::function<Result<std::unique_ptr<RenderResource>>(int worker_index)>;
 
