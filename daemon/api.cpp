@@ -162,11 +162,13 @@ void Service::connection_opened(bool tcp, const std::optional<PeerCred>& peer) n
 
 void Service::submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Responder>& responder) {
   const auto deadline = spec.deadline;
+  const auto memory_bytes = spec.memory_bytes;
   Metrics* metrics = &metrics_;
   auto waiter = scheduler_->submit(
       std::move(spec),
-      [responder, metrics](std::shared_ptr<const Reply> reply, bool coalesced) {
+      [responder, metrics, memory_bytes](std::shared_ptr<const Reply> reply, bool coalesced) {
         Reply r = *reply;
+        if (memory_bytes) r.headers.emplace_back("X-Hdrd-Memory-Estimate", std::to_string(memory_bytes));  // memory.hpp
         if (coalesced) {
           r.headers.emplace_back("X-Hdrd-Coalesced", "true");
           ++metrics->coalesced;
@@ -176,8 +178,8 @@ void Service::submit(JobSpec spec, bool needs_renderer, const std::shared_ptr<Re
       needs_renderer);
   if (!waiter) {
     Reply r = Reply::error(waiter.error());
-    if (waiter.error().code == "queue.full") {
-      ++metrics_.rejected_full;
+    if (waiter.error().code.rfind("queue.", 0) == 0) {  // queue.full, queue.memory
+      ++(waiter.error().code == "queue.full" ? metrics_.rejected_full : metrics_.rejected_memory);
       r.headers.emplace_back("Retry-After", std::to_string(config()->workers.retry_after_s));
     }
     responder->reply(std::move(r));
@@ -330,6 +332,7 @@ void Service::get_metrics(HttpRequest&, std::shared_ptr<Responder> responder) {
     gauges["hdrd_render_workers_ready"] = s.render_workers_ready;
     gauges["hdrd_encode_threads"] = s.encode_threads;
   }
+  add_resource_gauges(gauges, scheduler_.get(), server_.get());  // metrics.hpp: memory, connections
   if (server_) metrics_.in_flight = server_->open_requests();
   Reply r = Reply::json(200, metrics_.prometheus_text(gauges));
   r.content_type = "text/plain; version=0.0.4; charset=utf-8";

@@ -9,6 +9,8 @@
 #include "daemon/accept.hpp"
 #include "daemon/api_support.hpp"
 #include "daemon/frame_reply.hpp"
+#include "daemon/input_bounds.hpp"
+#include "daemon/memory.hpp"
 #include "daemon/paths.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
@@ -45,32 +47,10 @@ Result<json> encode_options(HttpRequest& http, const Config& cfg, std::string& e
       return make_error("request.conflict",
                         "multipart uploads carry their options in the 'request' part, not the query string",
                         http.query[0].first.substr(0, 64));
-    json options = json::object();
-    bool have_image = false;
-    for (auto& p : http.parts) {
-      if (p.name == "image" && !have_image) {
-        exr = std::move(p.data);
-        have_image = true;
-      } else if (p.name == "request") {
-        // Bounded before it is parsed, as a JSON body is: size, NUL, nesting depth.
-        if (p.data.size() > cfg.limits.max_body_bytes)
-          return make_error("request.limit", fmt::format("the 'request' part of {} bytes exceeds {} bytes", p.data.size(),
-                                                         cfg.limits.max_body_bytes), "request");
-        if (job::json_nesting_depth(p.data) > cfg.limits.max_json_depth)
-          return make_error("request.depth",
-                            fmt::format("the 'request' part nests deeper than {} levels", cfg.limits.max_json_depth),
-                            "request");
-        options = json::parse(p.data, nullptr, false);
-        if (options.is_discarded() || !options.is_object() || p.data.find('\0') != std::string::npos)
-          return make_error("request.syntax", "the 'request' part is not a JSON object", "request");
-      } else {
-        return make_error("request.unknown_field",
-                          fmt::format("multipart part '{}': expected 'image' and 'request'", one_line(p.name.substr(0, 64))),
-                          p.name.substr(0, 64));
-      }
-    }
-    if (!have_image) return make_error("request.value", "multipart body has no 'image' part (the EXR)", "image");
-    return options;
+    auto upload = split_encode_upload(http.parts, cfg.limits);  // input_bounds.hpp: the bounded JSON part
+    if (!upload) return upload.error();
+    exr = std::move(upload->exr);
+    return std::move(upload->options);
   }
   const std::string mt = media_type(http);
   if (mt != "image/x-exr" && mt != "application/octet-stream" && mt != "image/aces")
@@ -92,6 +72,18 @@ struct FrameJobState {
 };
 
 std::string_view prefix_of(job::Source s) { return job::to_string(s); }
+
+Result<std::uint64_t> memory_estimate(const job::FrameJob& job, std::optional<job::Output> reply,
+                                      std::size_t body_bytes, std::string_view exr, const job::Limits& limits) {
+  const job::FrameRequest& r = job.request();
+  switch (r.source) {
+    case job::Source::render: return estimate_render_memory(r, reply, body_bytes, limits);
+    case job::Source::encode:
+      return estimate_encode_memory(r, reply, {reinterpret_cast<const std::uint8_t*>(exr.data()), exr.size()}, limits);
+    case job::Source::pattern: return estimate_pattern_memory(r, reply, body_bytes);
+  }
+  return make_error("internal", "unknown request source");
+}
 
 }  // namespace
 
@@ -148,6 +140,10 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
 
   JobSpec spec;
   spec.deadline = request_deadline(http, timeout_s, *cfg);
+  // What the job will allocate at its peak, checked against the budget at admission (memory.hpp).
+  auto memory = memory_estimate(*st->job, st->reply, http.body.size(), exr, cfg->limits);
+  if (!memory) return responder->reply(Reply::error(memory.error()));
+  spec.memory_bytes = *memory;
   if (!dump)
     spec.key = key + "|" + std::string(job::output_info(*st->reply).content_type) +
                (exr.empty() ? "" : fmt::format("|exr:{}:{:016x}", exr.size(), fnv1a(exr)));

@@ -41,11 +41,9 @@ constexpr std::string_view kSelftestModes[] = {"sdr-srgb", "sdr", "sdr-bt1886", 
 Result<SelftestRequest> parse_selftest_request(std::string_view body, const job::Limits& limits) {
   SelftestRequest r;
   if (body.find_first_not_of(" \t\r\n") == std::string_view::npos) return r;
-  if (body.size() > limits.max_body_bytes || job::json_nesting_depth(body) > limits.max_json_depth)
-    return make_error("request.limit", "selftest request too large or too deeply nested");
-  const json doc = json::parse(body, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object() || body.find('\0') != std::string_view::npos)
-    return make_error("request.syntax", "the selftest request is not a JSON object");
+  auto parsed = job::parse_json_object_bounded(body, limits, "the selftest request");
+  if (!parsed) return parsed.error();
+  const json& doc = *parsed;
   for (auto it = doc.begin(); it != doc.end(); ++it) {
     const std::string& k = it.key();
     const json& v = *it;

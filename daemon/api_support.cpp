@@ -48,7 +48,7 @@ std::string generated_name(std::string_view prefix, std::uint64_t id) {
 
 Clock::time_point request_deadline(const HttpRequest& r, std::optional<double> timeout_s, const Config& cfg) {
   const double limit_s = std::min(timeout_s.value_or(cfg.limits.max_request_seconds), cfg.limits.max_request_seconds);
-  return r.started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limit_s));
+  return deadline_after(r.started, limit_s);  // saturating: no overflow into the past
 }
 
 int encode_threads_per_job(const Config& c) {

@@ -1,7 +1,12 @@
 #include "daemon/config.hpp"
 #include "encode/image.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
@@ -123,6 +128,10 @@ Config parse_config(std::string_view text, const std::string& source) {
   server.read("token_file", c.server.token_file);
   server.read("connection_timeout_s", c.server.connection_timeout_s);
   server.read("max_connections", c.server.max_connections);
+  server.read("max_connections_per_peer", c.server.max_connections_per_peer);
+  server.read("header_timeout_s", c.server.header_timeout_s);
+  server.read("body_grace_s", c.server.body_grace_s);
+  server.read("min_body_bytes_per_s", c.server.min_body_bytes_per_s);
   server.read("http_threads", c.server.http_threads);
   server.read("drain_timeout_s", c.server.drain_timeout_s);
   server.finish();
@@ -134,6 +143,7 @@ Config parse_config(std::string_view text, const std::string& source) {
   workers.read("backend", c.workers.backend);
   workers.read("coalesce", c.workers.coalesce);
   workers.read("retry_after_s", c.workers.retry_after_s);
+  workers.read("memory_budget_bytes", c.workers.memory_budget_bytes);
   workers.finish();
 
   Section paths(root, "paths", source);
@@ -175,34 +185,91 @@ void validate_config(const Config& c) {
   auto need = [&](bool ok, const std::string& key, const std::string& why) {
     if (!ok) throw HdrdError(make_error("config.invalid", fmt::format("{}: {} {}", c.source.string(), key, why), key));
   };
-  need(c.server.socket_mode <= 0777, "server.socket_mode", "must be at most 0777");
-  need((c.server.socket_mode & 0007) == 0, "server.socket_mode", "must not grant access to others (only owner and group)");
-  need(c.server.connection_timeout_s >= 1, "server.connection_timeout_s", "must be >= 1");
-  need(c.server.max_connections >= 1, "server.max_connections", "must be >= 1");
-  need(c.server.http_threads >= 1 && c.server.http_threads <= 64, "server.http_threads", "must be 1..64");
-  need(c.workers.render_workers >= 1 && c.workers.render_workers <= 64, "workers.render_workers", "must be 1..64");
-  need(c.workers.encode_threads >= 1 && c.workers.encode_threads <= 256, "workers.encode_threads", "must be 1..256");
-  need(c.workers.queue_depth >= 0, "workers.queue_depth", "must be >= 0");
+  // Every count, size and duration has a range: a value that parses (1e300 seconds) may
+  // still overflow what it feeds (a deadline), so "positive" is not enough.
+  auto range = [&](const std::string& key, auto v, auto lo, auto hi) {
+    using T = decltype(v);
+    need(v >= T(lo) && v <= T(hi), key, fmt::format("= {} is outside [{}, {}]", v, lo, hi));
+  };
+  const auto& s = c.server;
+  need(s.socket_mode <= 0777, "server.socket_mode", "must be at most 0777");
+  need((s.socket_mode & 0007) == 0, "server.socket_mode", "must not grant access to others (only owner and group)");
+  range("server.connection_timeout_s", s.connection_timeout_s, 1, 3600);
+  range("server.max_connections", s.max_connections, 1, 65536);
+  range("server.max_connections_per_peer", s.max_connections_per_peer, 1, s.max_connections);
+  range("server.header_timeout_s", s.header_timeout_s, 0.1, 3600.0);
+  range("server.body_grace_s", s.body_grace_s, 0.0, 3600.0);
+  range("server.min_body_bytes_per_s", s.min_body_bytes_per_s, 1u, 1ull << 40);
+  range("server.http_threads", s.http_threads, 1, 64);
+  range("server.drain_timeout_s", s.drain_timeout_s, 0.0, 3600.0);
+  const auto& w = c.workers;
+  range("workers.render_workers", w.render_workers, 1, 64);
+  range("workers.encode_threads", w.encode_threads, 1, 256);
+  range("workers.queue_depth", w.queue_depth, 0, 65536);
+  range("workers.retry_after_s", w.retry_after_s, 0, 3600);
+  if (w.memory_budget_bytes != 0) range("workers.memory_budget_bytes", w.memory_budget_bytes, 64ull << 20, 1ull << 50);
   static const std::set<std::string> kBackends = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
-  need(kBackends.count(c.workers.backend) > 0, "workers.backend",
-       "must be auto, egl, egl-device, egl-surfaceless or osmesa");
+  need(kBackends.count(w.backend) > 0, "workers.backend", "must be auto, egl, egl-device, egl-surfaceless or osmesa");
   const auto& l = c.limits;
-  need(l.max_width >= 1 && l.max_width <= kMaxImageDimension, "limits.max_width",
-       fmt::format("must be 1..{}", kMaxImageDimension));
-  need(l.max_height >= 1 && l.max_height <= kMaxImageDimension, "limits.max_height",
-       fmt::format("must be 1..{}", kMaxImageDimension));
-  need(l.max_pixels >= 1 && l.max_pixels <= kMaxImagePixels, "limits.max_pixels",
-       fmt::format("must be 1..{}", kMaxImagePixels));
-  need(l.max_samples >= 1, "limits.max_samples", "must be >= 1");
-  need(l.max_body_bytes >= 1024, "limits.max_body_bytes", "must be >= 1024");
-  need(l.max_upload_bytes >= 1024, "limits.max_upload_bytes", "must be >= 1024");
-  need(l.max_json_depth >= 4 && l.max_json_depth <= 256, "limits.max_json_depth", "must be 4..256");
-  need(l.max_request_seconds > 0, "limits.max_request_seconds", "must be > 0");
+  range("limits.max_width", l.max_width, 1, kMaxImageDimension);
+  range("limits.max_height", l.max_height, 1, kMaxImageDimension);
+  range("limits.max_pixels", l.max_pixels, 1, kMaxImagePixels);
+  range("limits.max_samples", l.max_samples, 1, 64);
+  range("limits.max_lights", l.max_lights, 0, 65536);
+  range("limits.max_body_bytes", l.max_body_bytes, 1024u, std::size_t(1) << 30);
+  range("limits.max_upload_bytes", l.max_upload_bytes, 1024u, std::size_t(4) << 30);
+  range("limits.max_ui_bytes", l.max_ui_bytes, 1024u, std::size_t(1) << 30);
+  range("limits.max_json_depth", l.max_json_depth, 4, 256);
+  // A day: far beyond any frame, and far inside what steady_clock's nanoseconds can add.
+  range("limits.max_request_seconds", l.max_request_seconds, 0.001, 86400.0);
   static const std::set<std::string> kLevels = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   need(kLevels.count(c.log.level) > 0, "log.level", "must be one of trace, debug, info, warn, error, critical, off");
-  if (!c.server.tcp_listen.empty())
-    need(!c.server.token.empty() || !c.server.token_file.empty(), "server.tcp_listen",
+  if (!s.tcp_listen.empty())
+    need(!s.token.empty() || !s.token_file.empty(), "server.tcp_listen",
          "needs server.token or server.token_file (TCP requires a bearer token)");
+}
+
+void check_config_paths(const Config& c) {
+  auto fail = [&](const std::string& key, const std::string& why) {
+    throw HdrdError(make_error("config.invalid", fmt::format("{}: {} {}", c.source.string(), key, why), key));
+  };
+  std::error_code ec;
+  if (!c.paths.asset_root.empty() && !fs::is_directory(c.paths.asset_root, ec))
+    fail("paths.asset_root", c.paths.asset_root.string() + " is not a directory");
+  const fs::path& dump = c.paths.dump_dir;
+  if (dump.empty()) return;
+  fs::create_directories(dump, ec);
+  if (ec) fail("paths.dump_dir", "cannot be created: " + dump.string() + ": " + ec.message());
+  if (!fs::is_directory(dump, ec)) fail("paths.dump_dir", dump.string() + " is not a directory");
+  // The one honest test of writability (permissions, read-only mounts, a full disk):
+  // create a file there, and remove it.
+  const int fd = ::open(dump.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
+  if (fd >= 0) {
+    ::close(fd);
+    return;
+  }
+  if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL)  // O_TMPFILE unsupported: try a named file
+    fail("paths.dump_dir", fmt::format("{} is not writable: {}", dump.string(), std::strerror(errno)));
+  const fs::path probe = dump / fmt::format(".hdrd-write-test-{}", ::getpid());
+  const int named = ::open(probe.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
+  if (named < 0) fail("paths.dump_dir", fmt::format("{} is not writable: {}", dump.string(), std::strerror(errno)));
+  ::close(named);
+  ::unlink(probe.c_str());
+}
+
+std::uint64_t effective_memory_budget(const WorkerConfig& w) {
+  if (w.memory_budget_bytes != 0) return w.memory_budget_bytes;
+  // Half of the RAM, at most 4 GiB: an 8K frame, or a 4K frame with 4x MSAA and an EXR
+  // answer, fits; an 8K frame with 16 samples (13 GiB by the estimate) does not.
+  constexpr std::uint64_t kDefaultCap = 4ull << 30;
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return kDefaultCap;
+  return std::min(kDefaultCap, std::uint64_t(pages) * std::uint64_t(page) / 2);
+}
+
+ConnectionLimits connection_limits(const ServerConfig& s) {
+  return ConnectionLimits{s.max_connections, s.max_connections_per_peer, s.header_timeout_s, s.body_grace_s,
+                          s.min_body_bytes_per_s};
 }
 
 nlohmann::json config_json(const Config& c) {
@@ -217,10 +284,13 @@ nlohmann::json config_json(const Config& c) {
         {"tcp_listen", s.tcp_listen}, {"tcp_allow_non_loopback", s.tcp_allow_non_loopback},
         {"token", s.token.empty() ? "" : "(set)"}, {"token_file", s.token_file.string()},
         {"connection_timeout_s", s.connection_timeout_s}, {"max_connections", s.max_connections},
+        {"max_connections_per_peer", s.max_connections_per_peer}, {"header_timeout_s", s.header_timeout_s},
+        {"body_grace_s", s.body_grace_s}, {"min_body_bytes_per_s", s.min_body_bytes_per_s},
         {"http_threads", s.http_threads}, {"drain_timeout_s", s.drain_timeout_s}}},
       {"workers",
        {{"render_workers", w.render_workers}, {"encode_threads", w.encode_threads}, {"queue_depth", w.queue_depth},
-        {"backend", w.backend}, {"coalesce", w.coalesce}, {"retry_after_s", w.retry_after_s}}},
+        {"backend", w.backend}, {"coalesce", w.coalesce}, {"retry_after_s", w.retry_after_s},
+        {"memory_budget_bytes", w.memory_budget_bytes}}},
       {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
       {"limits",
        {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},

@@ -3,11 +3,13 @@
 // and applies what can change at run time (limits, roots, log level).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "daemon/connections.hpp"
 #include "job/request.hpp"
 
 namespace hdrd::daemon {
@@ -24,8 +26,14 @@ struct ServerConfig {
   bool tcp_allow_non_loopback = false;     // refuse non-loopback addresses unless set
   std::string token;                       // bearer token (or token_file)
   std::filesystem::path token_file;
-  int connection_timeout_s = 30;           // idle/slow clients are closed after this
-  int max_connections = 64;
+  int connection_timeout_s = 30;           // a connection without a byte in either direction this long is closed
+  // Connection caps and deadlines (connections.hpp; docs/api.md "Connections"). Defaults
+  // from the measurements in docs/performance-daemon.md.
+  int max_connections = 256;               // at the cap, the oldest connection waiting for a request makes room
+  int max_connections_per_peer = 64;       // per uid (Unix socket) or address (TCP), the same way
+  double header_timeout_s = 10;            // the whole request header, from connect or the previous reply
+  double body_grace_s = 10;                // then the body must average at least min_body_bytes_per_s
+  std::uint64_t min_body_bytes_per_s = 65536;
   int http_threads = 2;                    // libmicrohttpd polling threads
   double drain_timeout_s = 30;             // SIGTERM: wait this long for in-flight requests
 };
@@ -36,7 +44,10 @@ struct WorkerConfig {
   int queue_depth = 16;                    // jobs waiting beyond the running ones; then 503
   std::string backend = "auto";            // auto, egl, egl-device, egl-surfaceless, osmesa
   bool coalesce = true;                    // identical concurrent requests share one job
-  int retry_after_s = 1;                   // Retry-After on 503 queue.full
+  int retry_after_s = 1;                   // Retry-After on 503 queue.full / queue.memory
+  // Memory that admitted requests may use together, by their estimates (memory.hpp);
+  // a request that would exceed it is answered 503 queue.memory. 0: half of the RAM, at most 4 GiB.
+  std::uint64_t memory_budget_bytes = 0;
 };
 
 struct PathsConfig {
@@ -63,8 +74,20 @@ struct Config {
 Config load_config(const std::filesystem::path& file);
 Config parse_config(std::string_view toml_text, const std::string& source_name);
 
-// Checks cross-field consistency (positive counts, mode bits, existing roots...).
+// Checks every count, size and duration against its range (a duration that parses but
+// overflows a deadline, such as 1e300 s, is refused) and cross-field consistency.
 void validate_config(const Config& c);
+
+// What needs the file system: the dump directory exists (or is created) and a file can be
+// written in it; the asset root, when set, is a directory. Run at start and on reload, so
+// that a bad directory is reported then and not at the first request. Throws HdrdError.
+void check_config_paths(const Config& c);
+
+// workers.memory_budget_bytes as it applies: the configured value, or half of the RAM, at most 4 GiB.
+std::uint64_t effective_memory_budget(const WorkerConfig& w);
+
+// The connection caps and deadlines of [server].
+ConnectionLimits connection_limits(const ServerConfig& s);
 
 // The default socket path: $XDG_RUNTIME_DIR/hdrd.sock when set, else /run/hdrd/hdrd.sock.
 std::filesystem::path default_socket_path();

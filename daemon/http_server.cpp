@@ -1,7 +1,10 @@
 #include "daemon/http_server.hpp"
 
+#include <arpa/inet.h>
 #include <microhttpd.h>
+#include <netinet/in.h>
 #include <poll.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cctype>
@@ -10,6 +13,8 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include "daemon/input_bounds.hpp"
 
 namespace hdrd::daemon {
 
@@ -27,6 +32,11 @@ struct HttpServer::RequestContext {
   bool too_large = false;
   bool queued = false;
   std::shared_ptr<Responder> responder;
+  std::uint64_t reserved = 0;  // of the body budget, given back when the request ends
+  HttpServer* server = nullptr;
+  ~RequestContext() {
+    if (server) server->body_bytes_reserved_ -= reserved;
+  }
 };
 
 namespace {
@@ -60,10 +70,42 @@ MHD_Result collect_header(void* cls, MHD_ValueKind, const char* key, const char*
   return MHD_YES;
 }
 
-MHD_Result collect_query(void* cls, MHD_ValueKind, const char* key, const char* value) {
+// With their lengths: a %00 in a value must reach check_query, not end the string there.
+MHD_Result collect_query(void* cls, MHD_ValueKind, const char* key, size_t key_size, const char* value,
+                         size_t value_size) {
   auto& q = *static_cast<std::vector<std::pair<std::string, std::string>>*>(cls);
-  q.emplace_back(key ? key : "", value ? value : "");
+  q.emplace_back(std::string(key ? key : "", key ? key_size : 0), std::string(value ? value : "", value ? value_size : 0));
   return MHD_YES;
+}
+
+// Who a connection belongs to, for the per-peer cap: the uid on a Unix socket (SO_PEERCRED),
+// the address on TCP.
+std::string peer_key(MHD_Connection* c, const std::optional<PeerCred>& cred) {
+  if (cred) return fmt::format("uid:{}", cred->uid);
+  const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  if (!ci || !ci->client_addr) return "unknown";
+  char text[INET6_ADDRSTRLEN] = {};
+  const sockaddr* a = ci->client_addr;
+  if (a->sa_family == AF_INET) ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(a)->sin_addr, text, sizeof text);
+  else if (a->sa_family == AF_INET6)
+    ::inet_ntop(AF_INET6, &reinterpret_cast<const sockaddr_in6*>(a)->sin6_addr, text, sizeof text);
+  return fmt::format("ip:{}", text);
+}
+
+// epoll serves thousands of connections, select()'s FD_SETSIZE does not matter; the open
+// file limit does. The soft limit is raised to the hard one (systemd's default hard limit
+// is 524288), and MHD's own connection limit stays below it with room for files and GL.
+// MHD's own limit is only a backstop far above the table's caps (which may grow on reload):
+// at it, MHD stops accepting. It costs nothing until connections exist.
+unsigned hard_connection_limit() {
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max) {
+    rl.rlim_cur = rl.rlim_max;
+    ::setrlimit(RLIMIT_NOFILE, &rl);
+    ::getrlimit(RLIMIT_NOFILE, &rl);
+  }
+  // 128 descriptors stay for files, GL and the listeners.
+  return rl.rlim_cur > 256 ? unsigned(std::min<rlim_t>(rl.rlim_cur - 128, 1u << 17)) : 128u;
 }
 
 struct PostState {
@@ -154,8 +196,15 @@ struct HttpServer::Callbacks {
     auto& inst = *static_cast<Instance*>(cls);
     return inst.server->on_access(inst, c, url, method, upload_data, upload_data_size, con_cls) ? MHD_YES : MHD_NO;
   }
-  static void completed(void* cls, MHD_Connection*, void** con_cls, MHD_RequestTerminationCode toe) {
+  // Called when the request line has arrived; its return value is MHD's initial con_cls,
+  // which must stay null (on_access takes null for "first call").
+  static void* uri_logged(void* cls, const char*, MHD_Connection* c) {
+    static_cast<Instance*>(cls)->server->connections_.request_line(c);
+    return nullptr;
+  }
+  static void completed(void* cls, MHD_Connection* c, void** con_cls, MHD_RequestTerminationCode toe) {
     auto& inst = *static_cast<Instance*>(cls);
+    inst.server->connections_.idle(c, std::chrono::steady_clock::now());
     auto* ctx = static_cast<RequestContext*>(*con_cls);
     if (!ctx) return;
     if (toe != MHD_REQUEST_TERMINATED_COMPLETED_OK)
@@ -171,15 +220,21 @@ struct HttpServer::Callbacks {
       if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD))
         info->peer = peer_credentials(ci->connect_fd);
       *socket_context = info;
+      const auto* fd = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+      inst.server->connections_.opened(c, fd ? fd->connect_fd : -1, peer_key(c, info->peer),
+                                       std::chrono::steady_clock::now());
       inst.server->handler_.connection_opened(inst.tcp, info->peer);
     } else {
+      inst.server->connections_.closed(c);
       delete static_cast<ConnectionInfo*>(*socket_context);
       *socket_context = nullptr;
     }
   }
 };
 
-HttpServer::HttpServer(HttpHandler& handler, HttpServerOptions options) : handler_(handler), options_(options) {
+HttpServer::HttpServer(HttpHandler& handler, HttpServerOptions options)
+    : handler_(handler), options_(options), connections_(options.connections),
+      body_budget_bytes_(options.body_budget_bytes) {
   watcher_ = std::thread([this] { watcher_loop(); });
 }
 
@@ -196,7 +251,8 @@ void HttpServer::add_listener(Listener listener) {
       MHD_OPTION_LISTEN_SOCKET, MHD_socket(inst->listener.fd()),
       MHD_OPTION_THREAD_POOL_SIZE, unsigned(options_.threads),
       MHD_OPTION_CONNECTION_TIMEOUT, unsigned(options_.connection_timeout_s),
-      MHD_OPTION_CONNECTION_LIMIT, unsigned(options_.max_connections),
+      MHD_OPTION_CONNECTION_LIMIT, hard_connection_limit(),
+      MHD_OPTION_URI_LOG_CALLBACK, &Callbacks::uri_logged, inst.get(),
       MHD_OPTION_CONNECTION_MEMORY_LIMIT, std::size_t(64 * 1024),
       MHD_OPTION_NOTIFY_COMPLETED, &Callbacks::completed, inst.get(),
       MHD_OPTION_NOTIFY_CONNECTION, &Callbacks::connection, inst.get(),
@@ -268,11 +324,18 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
   req.tcp = inst.tcp;
   req.started = std::chrono::steady_clock::now();
   MHD_get_connection_values(c, MHD_HEADER_KIND, &collect_header, &req.headers);
-  MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, &collect_query, &req.query);
+  MHD_get_connection_values_n(c, MHD_GET_ARGUMENT_KIND, &collect_query, &req.query);
   if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT))
     if (ci->socket_context) req.peer = static_cast<ConnectionInfo*>(ci->socket_context)->peer;
+  connections_.header_complete(c, req.started);
+  if (connections_.refused(c)) {
+    Reply busy = Reply::error(make_error("server.busy", "every connection is busy with a request; retry later"));
+    busy.headers.emplace_back("Retry-After", "1");
+    return queue(c, ctx, busy);
+  }
   auto pre = handler_.begin(req);
   if (auto* r = std::get_if<Reply>(&pre)) return queue(c, ctx, *r);
+  if (auto bad = refuse_early(c, req)) return queue(c, ctx, *bad);
   ctx.limit = std::get<std::size_t>(pre);
   if (const auto* cl = req.header("content-length")) {
     char* end = nullptr;
@@ -284,13 +347,44 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
       // see the 413 instead of a broken pipe.
       if (req.header("expect") || n > ctx.limit + kDrainLimitBytes) return queue(c, ctx, too_large_reply(ctx.limit));
       ctx.too_large = true;
+    } else if (end && *end == '\0' && n > 0) {
+      // Bodies being received count against the memory budget too: a hundred clients
+      // uploading at once would otherwise hold gigabytes before any job is admitted.
+      const std::uint64_t budget = body_budget_bytes_.load();
+      if (body_bytes_reserved_.fetch_add(n) + n > budget) {
+        body_bytes_reserved_ -= n;
+        Reply busy = Reply::error(make_error("queue.memory", fmt::format("request bodies being received hold the "
+                                                                         "memory budget of {} bytes; retry later", budget)));
+        busy.headers.emplace_back("Retry-After", "1");
+        return queue(c, ctx, busy);
+      }
+      ctx.reserved = n;
+      ctx.server = this;
+      // One allocation of the declared size instead of a string that doubles as it grows
+      // (and so holds up to twice the body at its peak). Pages are touched as bytes arrive.
+      try {
+        req.body.reserve(std::size_t(n));
+      } catch (const std::bad_alloc&) {
+        return queue(c, ctx, Reply::error(make_error("queue.memory", "no memory for the request body; retry later")));
+      }
     }
   }
   return MHD_YES;
 }
 
+// What the HTTP layer refuses before the handler reads a byte of the body.
+std::optional<Reply> HttpServer::refuse_early(MHD_Connection*, const HttpRequest& req) {
+  if (const auto* te = req.header("transfer-encoding"); te && !te->empty())
+    return Reply::error(make_error("request.length_required",
+                                   "request bodies must carry Content-Length (Transfer-Encoding is not accepted)",
+                                   "transfer-encoding"));
+  if (auto q = check_query(req.query); !q) return Reply::error(q.error());
+  return std::nullopt;
+}
+
 // Body bytes as they stream in, kept up to the limit; beyond it they are dropped.
-void HttpServer::collect_body(RequestContext& ctx, const char* data, std::size_t size) {
+void HttpServer::collect_body(MHD_Connection* c, RequestContext& ctx, const char* data, std::size_t size) {
+  connections_.body_bytes(c, size);
   if (ctx.too_large || ctx.queued) return;
   if (ctx.req.body.size() + size > ctx.limit) {
     ctx.too_large = true;
@@ -326,6 +420,7 @@ int HttpServer::dispatch(MHD_Connection* c, RequestContext& ctx) {
   responder->connection_ = c;
   if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD)) responder->fd_ = ci->connect_fd;
   ctx.responder = responder;
+  connections_.busy(c);
   handler_.handle(ctx.req, responder);
   {
     std::unique_lock lock(responder->mu_);
@@ -351,7 +446,7 @@ int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, co
     return begin_request(inst, c, url, method, *ctx);
   }
   if (*upload_data_size > 0) {
-    collect_body(*ctx, upload_data, *upload_data_size);
+    collect_body(c, *ctx, upload_data, *upload_data_size);
     *upload_data_size = 0;
     return MHD_YES;
   }
@@ -376,11 +471,16 @@ void HttpServer::watch(std::shared_ptr<Responder> r) {
 
 // MHD does not look at suspended connections, so a client that hangs up during a long
 // render would go unnoticed: poll their sockets for POLLRDHUP/POLLHUP, and enforce
-// deadlines, every 20 ms.
+// deadlines, every 20 ms; the connection table's header and body deadlines every 100 ms.
 void HttpServer::watcher_loop() {
   std::vector<std::shared_ptr<Responder>> list;
   std::vector<pollfd> fds;
+  auto next_enforce = std::chrono::steady_clock::now();
   while (!stop_watcher_) {
+    if (const auto now = std::chrono::steady_clock::now(); now >= next_enforce) {
+      connections_.enforce(now);
+      next_enforce = now + std::chrono::milliseconds(100);
+    }
     {
       std::lock_guard lock(watch_mu_);
       watched_.erase(std::remove_if(watched_.begin(), watched_.end(), [](const auto& r) { return r->replied(); }),

@@ -5,6 +5,10 @@
 // later (a render) suspends its connection until the reply arrives. A watcher thread
 // notices clients that hang up while their connection is suspended (MHD does not) and
 // requests that pass their deadline, and tells the handler so the job can be cancelled.
+// It also enforces the connection table's header and body deadlines (connections.hpp),
+// and the table's caps decide, as each connection opens, which idle one makes room.
+// Request bodies must declare their length (chunked bodies are answered 411: MHD answers
+// an over-long chunk line with its own HTML 500), and query parameters must be UTF-8.
 #pragma once
 
 #include <atomic>
@@ -20,6 +24,7 @@
 #include <variant>
 #include <vector>
 
+#include "daemon/connections.hpp"
 #include "daemon/listener.hpp"
 #include "daemon/reply.hpp"
 
@@ -95,8 +100,10 @@ class HttpHandler {
 
 struct HttpServerOptions {
   int threads = 2;
-  int connection_timeout_s = 30;
-  int max_connections = 64;
+  int connection_timeout_s = 30;  // MHD's inactivity timeout (a client that stops reading a reply)
+  ConnectionLimits connections;
+  // Declared lengths of the bodies being received, together; beyond it 503 queue.memory.
+  std::uint64_t body_budget_bytes = std::uint64_t(4) << 30;
 };
 
 class HttpServer {
@@ -113,6 +120,10 @@ class HttpServer {
   // Aborts whatever is still suspended, then stops every MHD daemon.
   void stop();
   std::int64_t open_requests() const { return open_requests_.load(); }
+  ConnectionStats connection_stats() const { return connections_.stats(); }
+  // Caps and deadlines may change at run time (SIGHUP).
+  void set_connection_limits(const ConnectionLimits& limits) { connections_.set_limits(limits); }
+  void set_body_budget(std::uint64_t bytes) { body_budget_bytes_ = bytes; }
 
  private:
   struct Instance;
@@ -122,7 +133,8 @@ class HttpServer {
   int on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* upload_data,
                 std::size_t* upload_data_size, void** con_cls);
   int begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method, RequestContext& ctx);
-  void collect_body(RequestContext& ctx, const char* data, std::size_t size);
+  void collect_body(MHD_Connection* c, RequestContext& ctx, const char* data, std::size_t size);
+  std::optional<Reply> refuse_early(MHD_Connection* c, const HttpRequest& req);
   std::optional<Reply> split_multipart(MHD_Connection* c, RequestContext& ctx);
   int dispatch(MHD_Connection* c, RequestContext& ctx);
   int queue(MHD_Connection* c, RequestContext& ctx, const Reply& r);
@@ -131,6 +143,9 @@ class HttpServer {
 
   HttpHandler& handler_;
   HttpServerOptions options_;
+  ConnectionTable connections_;
+  std::atomic<std::uint64_t> body_budget_bytes_;
+  std::atomic<std::uint64_t> body_bytes_reserved_{0};
   std::vector<std::unique_ptr<Instance>> instances_;
   std::atomic<std::uint64_t> next_id_{1};
   std::atomic<std::int64_t> open_requests_{0};

@@ -38,6 +38,17 @@ bool socket_is_live(const sockaddr_un& addr) {
 
 }  // namespace
 
+Listener::Listener(int fd, std::string description, bool is_unix, fs::path unlink_path)
+    : fd_(fd), description_(std::move(description)), is_unix_(is_unix), unlink_path_(std::move(unlink_path)) {
+  struct stat st{};
+  if (!unlink_path_.empty() && ::lstat(unlink_path_.c_str(), &st) == 0) {
+    unlink_dev_ = st.st_dev;
+    unlink_ino_ = st.st_ino;
+  } else {
+    unlink_path_.clear();  // nothing of ours to remove
+  }
+}
+
 Listener::~Listener() { close(); }
 
 Listener& Listener::operator=(Listener&& o) noexcept {
@@ -47,6 +58,8 @@ Listener& Listener::operator=(Listener&& o) noexcept {
     description_ = std::move(o.description_);
     is_unix_ = o.is_unix_;
     unlink_path_ = std::move(o.unlink_path_);
+    unlink_dev_ = o.unlink_dev_;
+    unlink_ino_ = o.unlink_ino_;
     o.fd_ = -1;
     o.unlink_path_.clear();
   }
@@ -63,8 +76,12 @@ void Listener::close() {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
   if (!unlink_path_.empty()) {
-    std::error_code ec;
-    fs::remove(unlink_path_, ec);
+    // Only the inode we bound: if another daemon has since replaced the socket file, the
+    // path is its now. (A window remains between lstat and unlink; nothing narrower exists
+    // for a path.)
+    struct stat st{};
+    if (::lstat(unlink_path_.c_str(), &st) == 0 && st.st_dev == unlink_dev_ && st.st_ino == unlink_ino_)
+      ::unlink(unlink_path_.c_str());
     unlink_path_.clear();
   }
 }

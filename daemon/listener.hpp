@@ -16,8 +16,7 @@ namespace hdrd::daemon {
 class Listener {
  public:
   Listener() = default;
-  Listener(int fd, std::string description, bool is_unix, std::filesystem::path unlink_path = {})
-      : fd_(fd), description_(std::move(description)), is_unix_(is_unix), unlink_path_(std::move(unlink_path)) {}
+  Listener(int fd, std::string description, bool is_unix, std::filesystem::path unlink_path = {});
   ~Listener();
   Listener(Listener&& o) noexcept { *this = std::move(o); }
   Listener& operator=(Listener&& o) noexcept;
@@ -35,17 +34,21 @@ class Listener {
   int fd_ = -1;
   std::string description_;
   bool is_unix_ = false;
-  std::filesystem::path unlink_path_;  // socket file we created and remove on close
+  std::filesystem::path unlink_path_;  // socket file we created and remove on close, if it is still ours:
+  dev_t unlink_dev_ = 0;               // the inode bind() made; another daemon's socket at the same
+  ino_t unlink_ino_ = 0;               // path (after ours was replaced) is left alone
 };
 
 // Creates the socket's directory if needed (mode 0750... not widened if it exists),
 // refuses to replace a live socket or a non-socket file, replaces a stale socket file,
 // binds with a umask that never exposes the socket, then chmods it to `mode` and
 // optionally chgrps it. Throws HdrdError on failure.
-Listener listen_unix(const std::filesystem::path& path, unsigned mode, const std::string& group, int backlog = 128);
+// The backlog is the kernel's maximum (net.core.somaxconn caps it): a burst of connects
+// waits there while the server accepts, instead of being refused.
+Listener listen_unix(const std::filesystem::path& path, unsigned mode, const std::string& group, int backlog = 4096);
 
 // "host:port" or "[v6]:port". Throws unless the address is loopback or `allow_non_loopback`.
-Listener listen_tcp(const std::string& host_port, bool allow_non_loopback, int backlog = 128);
+Listener listen_tcp(const std::string& host_port, bool allow_non_loopback, int backlog = 4096);
 
 // sd_listen_fds(3): the fds systemd passed (LISTEN_PID must be ours), marked close-on-exec;
 // unsets LISTEN_PID/LISTEN_FDS/LISTEN_FDNAMES so children do not inherit them.

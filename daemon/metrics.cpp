@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include "daemon/http_server.hpp"
+#include "daemon/scheduler.hpp"
+
 namespace hdrd::daemon {
 
 void Metrics::Histogram::observe(double v) {
@@ -64,12 +67,34 @@ std::string Metrics::prometheus_text(const std::map<std::string, double>& gauges
   counter("hdrd_timeouts_total", "Requests that exceeded their time limit.", timed_out.load());
   counter("hdrd_rejected_queue_full_total", "Requests refused with 503 because the queue was full.",
           rejected_full.load());
+  counter("hdrd_rejected_memory_total", "Requests refused with 503 because the memory budget was taken.",
+          rejected_memory.load());
   counter("hdrd_connections_total", "Connections accepted.", connections.load());
   counter("hdrd_config_reloads_total", "Configuration reloads (SIGHUP) applied.", reloads.load());
   out += fmt::format("# HELP hdrd_in_flight_requests HTTP requests being handled.\n"
                      "# TYPE hdrd_in_flight_requests gauge\nhdrd_in_flight_requests {}\n", in_flight.load());
   for (const auto& [name, v] : gauges) out += fmt::format("# TYPE {} gauge\n{} {}\n", name, name, v);
   return out;
+}
+
+}  // namespace hdrd::daemon
+
+namespace hdrd::daemon {
+
+void add_resource_gauges(std::map<std::string, double>& gauges, const Scheduler* scheduler, const HttpServer* server) {
+  if (scheduler) {
+    const auto s = scheduler->stats();
+    gauges["hdrd_memory_in_flight_bytes"] = double(s.memory_in_flight_bytes);
+    gauges["hdrd_memory_budget_bytes"] = double(s.memory_budget_bytes);
+  }
+  if (server) {
+    const auto c = server->connection_stats();
+    gauges["hdrd_connections_open"] = c.open;
+    gauges["hdrd_connections_evicted"] = double(c.evicted);
+    gauges["hdrd_connections_header_timeouts"] = double(c.header_timeouts);
+    gauges["hdrd_connections_body_timeouts"] = double(c.body_timeouts);
+    gauges["hdrd_connections_refused"] = double(c.refused);
+  }
 }
 
 }  // namespace hdrd::daemon

@@ -13,6 +13,9 @@
 
 namespace hdrd::daemon {
 
+class Scheduler;
+class HttpServer;
+
 class Metrics {
  public:
   // Latency buckets in seconds (upper bounds; +Inf implied).
@@ -28,6 +31,7 @@ class Metrics {
   std::atomic<std::uint64_t> cancelled{0};       // requests whose client went away
   std::atomic<std::uint64_t> timed_out{0};       // requests past their time limit
   std::atomic<std::uint64_t> rejected_full{0};   // 503 queue.full
+  std::atomic<std::uint64_t> rejected_memory{0}; // 503 queue.memory
   std::atomic<std::uint64_t> connections{0};     // connections accepted
   std::atomic<std::uint64_t> reloads{0};         // SIGHUP reloads applied
 
@@ -47,5 +51,9 @@ class Metrics {
   std::map<std::string, Histogram> stages_;                               // stage
   std::uint64_t bytes_in_ = 0, bytes_out_ = 0;
 };
+
+// Gauges and counters of what bounds the daemon: memory admitted against its budget, and
+// the connection table (open, evicted, closed for slow headers or bodies, refused).
+void add_resource_gauges(std::map<std::string, double>& gauges, const Scheduler* scheduler, const HttpServer* server);
 
 }  // namespace hdrd::daemon

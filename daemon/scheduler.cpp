@@ -1,8 +1,12 @@
 #include "daemon/scheduler.hpp"
 
+#include <malloc.h>
+
 #include <algorithm>
 
 #include <spdlog/spdlog.h>
+
+#include "daemon/memory.hpp"
 
 namespace hdrd::daemon {
 
@@ -12,6 +16,7 @@ struct Job {
   std::vector<std::shared_ptr<Waiter>> waiters;
   std::atomic<bool> cancelled{false};
   bool started = false;   // a worker has taken it
+  bool memory_released = false;
 };
 
 namespace {
@@ -36,6 +41,15 @@ auto guarded(F&& f) -> std::optional<decltype(f())> {
 }
 
 }  // namespace
+
+Clock::time_point deadline_after(Clock::time_point start, double seconds) {
+  // steady_clock counts nanoseconds in 64 bits: about 292 years. Anything beyond a year
+  // is "never" for a request, and must not wrap around.
+  constexpr double kMaxSeconds = 365.0 * 86400.0;
+  if (!(seconds > 0)) return start;
+  const double s = std::min(seconds, kMaxSeconds);
+  return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
 
 Scheduler::Scheduler(SchedulerOptions options, RenderResourceFactory factory)
     : options_(options), factory_(std::move(factory)) {
@@ -68,10 +82,21 @@ Result<std::shared_ptr<Waiter>> Scheduler::submit(JobSpec spec,
       return waiter;
     }
   }
+  if (spec.memory_bytes > options_.memory_budget_bytes)
+    return make_error("request.memory", fmt::format("the request needs about {} of memory, more than the daemon's "
+                                                    "budget of {} (workers.memory_budget_bytes); ask for less",
+                                                    format_bytes(spec.memory_bytes),
+                                                    format_bytes(options_.memory_budget_bytes)));
   const int capacity = options_.render_workers + options_.encode_threads + options_.queue_depth;
   if (int(active_.size()) >= capacity)
     return make_error("queue.full",
                       fmt::format("the queue is full ({} requests in progress); retry later", active_.size()));
+  if (memory_in_flight_ + spec.memory_bytes > options_.memory_budget_bytes)
+    return make_error("queue.memory", fmt::format("the request needs about {} of memory and {} of the {} budget are "
+                                                  "taken by requests in progress; retry later",
+                                                  format_bytes(spec.memory_bytes), format_bytes(memory_in_flight_),
+                                                  format_bytes(options_.memory_budget_bytes)));
+  memory_in_flight_ += spec.memory_bytes;
   auto job = std::make_shared<Job>();
   job->spec = std::move(spec);
   job->needs_renderer = needs_renderer;
@@ -109,6 +134,7 @@ bool Scheduler::cancel(const std::shared_ptr<Waiter>& waiter) {
         if (it != q->end()) {
           q->erase(it);
           active_.erase(job);
+          release_memory(*job);
           abandoned = job;
         }
       }
@@ -157,6 +183,7 @@ void Scheduler::render_loop(int index) {
       continue;
     }
     auto r = guarded([&] { return job->spec.render(resource.get(), control); });
+    if (resource && job->spec.memory_bytes >= options_.trim_after_bytes) resource->release_large_buffers(job->spec.memory_bytes);
     if (!r) {
       finish_job(job, error_reply("internal", "internal error while rendering"));
     } else if (!r->ok()) {
@@ -194,18 +221,32 @@ void Scheduler::encode_loop() {
   }
 }
 
+void Scheduler::release_memory(Job& job) {
+  if (job.memory_released) return;
+  job.memory_released = true;
+  memory_in_flight_ -= std::min(memory_in_flight_, job.spec.memory_bytes);
+}
+
 void Scheduler::finish_job(const std::shared_ptr<Job>& job, std::shared_ptr<const Reply> reply) {
   std::vector<std::shared_ptr<Waiter>> waiters;
+  bool trim = false;
   {
     std::lock_guard lock(mu_);
     if (auto it = by_key_.find(job->spec.key); it != by_key_.end() && it->second == job) by_key_.erase(it);
     waiters.swap(job->waiters);
     --running_;
     active_.erase(job);
+    release_memory(*job);
+    trim = job->spec.memory_bytes >= options_.trim_after_bytes;
     idle_cv_.notify_all();
   }
   for (auto& w : waiters)
     if (!w->done.exchange(true)) w->deliver(reply, w->coalesced);
+  // The job's buffers are freed by now, except the reply, which the waiters share. glibc
+  // keeps freed heap memory for reuse (in every thread's arena); handing it back after a
+  // large job keeps a burst from staying resident (docs/performance-daemon.md, "Memory").
+  reply.reset();
+  if (trim) ::malloc_trim(0);
 }
 
 void Scheduler::drain_and_stop(std::chrono::duration<double> timeout) {
@@ -222,6 +263,7 @@ void Scheduler::drain_and_stop(std::chrono::duration<double> timeout) {
       for (auto& j : *q) {
         left.push_back(j);
         active_.erase(j);
+        release_memory(*j);
       }
       q->clear();
     }
@@ -253,6 +295,11 @@ void Scheduler::set_queue_depth(int depth) {
   options_.queue_depth = depth;
 }
 
+void Scheduler::set_memory_budget(std::uint64_t bytes) {
+  std::lock_guard lock(mu_);
+  options_.memory_budget_bytes = bytes;
+}
+
 SchedulerStats Scheduler::stats() const {
   std::lock_guard lock(mu_);
   SchedulerStats s;
@@ -263,6 +310,8 @@ SchedulerStats Scheduler::stats() const {
   s.render_workers_ready = ready_workers_;
   s.encode_threads = options_.encode_threads;
   s.capacity = options_.render_workers + options_.encode_threads + options_.queue_depth;
+  s.memory_in_flight_bytes = memory_in_flight_;
+  s.memory_budget_bytes = options_.memory_budget_bytes;
   for (const auto& w : worker_info_) s.workers.push_back(w);
   return s;
 }

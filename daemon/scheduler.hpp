@@ -2,12 +2,17 @@
 // owning a resource created on its own thread (a renderer with its GL context, which is
 // bound to that thread); a CPU pool for encoding; identical concurrent requests share one
 // job (coalesced by key); a waiter whose client left is detached, and a job nobody waits
-// for any more is cancelled at its next stage boundary.
+// for any more is cancelled at its next stage boundary. Admission also weighs memory: each
+// job carries an estimate of what it will allocate (memory.hpp), and the jobs admitted
+// together stay within a budget; one more is refused (503 queue.memory) rather than let
+// the resident set grow without bound. After a large job the allocator's free memory is
+// handed back to the system (malloc_trim), so that a burst does not leave it resident.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -46,12 +51,19 @@ class RenderResource {
  public:
   virtual ~RenderResource() = default;
   virtual nlohmann::json info() const = 0;  // backend, GL_RENDERER, ...
+  // After a job whose estimate reached SchedulerOptions::trim_after_bytes, on the worker's
+  // thread: give back what the resource keeps for the next job (a large frame's targets).
+  virtual void release_large_buffers(std::uint64_t /*job_memory_bytes*/) {}
 };
 using RenderResourceFactory = std::function<Result<std::unique_ptr<RenderResource>>(int worker_index)>;
+
+// `seconds` after `start`, saturating: a configured 1e300 s must not overflow into the past.
+Clock::time_point deadline_after(Clock::time_point start, double seconds);
 
 struct JobSpec {
   std::string key;              // coalescing key; empty: never shared
   Clock::time_point deadline;
+  std::uint64_t memory_bytes = 0;  // estimated peak allocation of the job (memory.hpp)
   // Runs on a render worker when set (the resource is null when the worker has none).
   std::function<Result<void>(RenderResource*, const JobControl&)> render;
   // Runs on the encode pool; produces the reply every waiter receives.
@@ -74,6 +86,9 @@ struct SchedulerOptions {
   int encode_threads = 2;
   int queue_depth = 16;         // admitted jobs beyond those the workers can run at once
   bool coalesce = true;
+  std::uint64_t memory_budget_bytes = std::uint64_t(4) << 30;  // admitted jobs' estimates together
+  // Jobs whose estimate is at least this return the allocator's free memory afterwards.
+  std::uint64_t trim_after_bytes = std::uint64_t(32) << 20;
 };
 
 struct SchedulerStats {
@@ -81,6 +96,7 @@ struct SchedulerStats {
   int queued = 0;               // jobs not yet started by any worker
   int running = 0;
   int render_workers = 0, render_workers_ready = 0, encode_threads = 0, capacity = 0;
+  std::uint64_t memory_in_flight_bytes = 0, memory_budget_bytes = 0;
   nlohmann::json workers = nlohmann::json::array();  // per render worker: info or error
 };
 
@@ -94,8 +110,9 @@ class Scheduler {
   // Starts the threads and waits until every render worker has created its resource.
   void start();
 
-  // Admits a job (or joins an identical one in flight). Errors: queue.full,
-  // server.draining, renderer.unavailable (a render job and no worker has a resource).
+  // Admits a job (or joins an identical one in flight). Errors: queue.full, queue.memory
+  // (the budget is taken by admitted jobs), request.memory (the job alone exceeds the
+  // budget), server.draining, renderer.unavailable (a render job and no worker has one).
   Result<std::shared_ptr<Waiter>> submit(JobSpec spec, std::function<void(std::shared_ptr<const Reply>, bool)> deliver,
                                          bool needs_renderer);
 
@@ -108,6 +125,7 @@ class Scheduler {
   void drain_and_stop(std::chrono::duration<double> timeout);
 
   void set_queue_depth(int depth);
+  void set_memory_budget(std::uint64_t bytes);
   SchedulerStats stats() const;
   bool renderer_available() const;
 
@@ -127,6 +145,8 @@ class Scheduler {
   std::unordered_map<std::string, std::shared_ptr<Job>> by_key_;
   std::unordered_set<std::shared_ptr<Job>> active_;  // admitted and not finished
   int running_ = 0, started_workers_ = 0, ready_workers_ = 0;
+  std::uint64_t memory_in_flight_ = 0;
+  void release_memory(Job& job);  // under mu_
   bool stopping_ = false;
   std::atomic<bool> draining_{false};
   std::vector<nlohmann::json> worker_info_;

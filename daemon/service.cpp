@@ -2,6 +2,7 @@
 // handlers are in api.cpp.
 #include "daemon/service.hpp"
 
+#include <malloc.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -55,16 +56,20 @@ std::shared_ptr<const Config> Service::config() const {
   return config_;
 }
 
+// glibc raises its mmap threshold to the size of every large block freed (up to 32 MiB),
+// after which frame-sized buffers come from the heap, fragment it and stay resident: a
+// burst of large requests left the RSS 60 % above its warm-up level. A fixed threshold
+// (which also turns the adjustment off) keeps every buffer of 1 MiB or more in its own
+// mapping, returned when freed: 3 % (docs/performance-daemon.md, "Memory").
+constexpr int kMmapThresholdBytes = 1 << 20;
+
 void Service::start() {
+  ::mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes);
   auto cfg = config();
   set_log_level(cfg->log.level);
   token_ = read_token(cfg->server);
-  if (!cfg->paths.dump_dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(cfg->paths.dump_dir, ec);
-    if (ec) throw HdrdError(make_error("config.invalid", "cannot create paths.dump_dir " + cfg->paths.dump_dir.string() +
-                                                             ": " + ec.message(), "paths.dump_dir"));
-  }
+  check_config_paths(*cfg);  // a dump directory that cannot be written stops the start, not the first dump
+  if (!cfg->paths.dump_dir.empty()) dump_dir_ = std::make_unique<DumpDirectory>(cfg->paths.dump_dir);
 
   std::vector<Listener> listeners;
   if (cfg->server.systemd_activation) {
@@ -90,13 +95,15 @@ void Service::start() {
   so.encode_threads = cfg->workers.encode_threads;
   so.queue_depth = cfg->workers.queue_depth;
   so.coalesce = cfg->workers.coalesce;
+  so.memory_budget_bytes = effective_memory_budget(cfg->workers);
   scheduler_ = std::make_unique<Scheduler>(so, renderer_factory(cfg->workers.backend));
   scheduler_->start();
 
   HttpServerOptions ho;
   ho.threads = cfg->server.http_threads;
   ho.connection_timeout_s = cfg->server.connection_timeout_s;
-  ho.max_connections = cfg->server.max_connections;
+  ho.connections = connection_limits(cfg->server);
+  ho.body_budget_bytes = so.memory_budget_bytes;
   server_ = std::make_unique<HttpServer>(*this, ho);
   for (auto& l : listeners) {
     listener_descriptions_.push_back(l.description());
@@ -106,6 +113,7 @@ void Service::start() {
 }
 
 void Service::reload(Config fresh) {
+  check_config_paths(fresh);  // throws: the reload is refused and the old configuration kept
   auto old = config();
   auto restart_needed = [&](bool changed, const char* key) {
     if (changed) spdlog::warn("reload: {} changed; it takes effect after a restart", key);
@@ -117,17 +125,29 @@ void Service::reload(Config fresh) {
   restart_needed(fresh.workers.render_workers != old->workers.render_workers, "workers.render_workers");
   restart_needed(fresh.workers.encode_threads != old->workers.encode_threads, "workers.encode_threads");
   restart_needed(fresh.workers.backend != old->workers.backend, "workers.backend");
-  // Keep what cannot change now, so that status reports what is really in effect.
+  // Keep what cannot change now, so that status reports what is really in effect; the
+  // connection caps and deadlines do change at once.
+  const ServerConfig applied = fresh.server;
   fresh.server = old->server;
+  fresh.server.max_connections = applied.max_connections;
+  fresh.server.max_connections_per_peer = applied.max_connections_per_peer;
+  fresh.server.header_timeout_s = applied.header_timeout_s;
+  fresh.server.body_grace_s = applied.body_grace_s;
+  fresh.server.min_body_bytes_per_s = applied.min_body_bytes_per_s;
   fresh.workers.render_workers = old->workers.render_workers;
   fresh.workers.encode_threads = old->workers.encode_threads;
   fresh.workers.backend = old->workers.backend;
-  if (!fresh.paths.dump_dir.empty()) {
-    std::error_code ec;
-    fs::create_directories(fresh.paths.dump_dir, ec);
-  }
+  if (fresh.paths.dump_dir != old->paths.dump_dir)
+    dump_dir_ = fresh.paths.dump_dir.empty() ? nullptr : std::make_unique<DumpDirectory>(fresh.paths.dump_dir);
   set_log_level(fresh.log.level);
-  if (scheduler_) scheduler_->set_queue_depth(fresh.workers.queue_depth);
+  if (scheduler_) {
+    scheduler_->set_queue_depth(fresh.workers.queue_depth);
+    scheduler_->set_memory_budget(effective_memory_budget(fresh.workers));
+  }
+  if (server_) {
+    server_->set_connection_limits(connection_limits(fresh.server));
+    server_->set_body_budget(effective_memory_budget(fresh.workers));
+  }
   {
     std::lock_guard lock(config_mu_);
     config_ = std::make_shared<const Config>(std::move(fresh));

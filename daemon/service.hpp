@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/config.hpp"
+#include "daemon/dump_dir.hpp"
 #include "daemon/http_server.hpp"
 #include "daemon/metrics.hpp"
 #include "daemon/scheduler.hpp"
@@ -30,7 +31,9 @@ class Service final : public HttpHandler {
   // Throws HdrdError when a socket cannot be bound or MHD refuses to start.
   void start();
   // Applies what can change at run time (limits, roots, render defaults, log level,
-  // queue depth, access log); names what needs a restart in the log.
+  // queue depth, memory budget, connection caps and deadlines, access log); names what
+  // needs a restart in the log. Throws (and changes nothing) when the new dump directory
+  // cannot be written.
   void reload(Config fresh);
   // Stops accepting, drains in-flight requests within server.drain_timeout_s, stops.
   void shutdown();
@@ -72,6 +75,7 @@ class Service final : public HttpHandler {
   std::shared_ptr<const Config> config_;
   std::string token_;
   Metrics metrics_;
+  std::unique_ptr<DumpDirectory> dump_dir_;  // locked while used; stale temporaries removed at start
   std::unique_ptr<Scheduler> scheduler_;
   std::unique_ptr<HttpServer> server_;
   std::vector<std::string> listener_descriptions_;

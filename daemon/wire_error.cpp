@@ -21,10 +21,16 @@ constexpr StatusEntry kStatus[] = {
     {"request.not_found", 404},
     {"request.method", 405},
     {"request.timeout", 504},
+    {"request.header_timeout", 408},   // a connection that did not send its request header in time
+    {"request.body_timeout", 408},     // ... or its body fast enough
+    {"request.length_required", 411},  // chunked request bodies: a body must declare its length
     {"request.cancelled", 499},
     {"path.forbidden", 403},
     {"path.not_found", 404},
     {"queue.full", 503},
+    {"queue.memory", 503},            // the in-flight memory budget is taken; retry later
+    {"server.busy", 503},             // every connection slot holds a request in progress
+    {"io.no_space", 507},             // the dump directory's file system is full (RFC 4918 §11.5)
     {"server.draining", 503},
     {"renderer.unavailable", 503},
     {"pipeline.unavailable", 503},
@@ -44,9 +50,9 @@ constexpr StatusEntry kStatus[] = {
     {"exposure.", 422},
     {"grade.", 422},
     {"display.", 422},
-    {"edid.", 422},
-    {"profile.", 422},
-    {"file.", 422},
+    {"edid.", 422},     // a file named by display.edid that is not a valid EDID
+    {"profile.", 422},  // ... or one whose display profile is unusable
+    {"file.", 422},     // a file named by a request that cannot be read (too large, unreadable)
     {"encode.", 422},
     {"pipeline.", 422},
     {"image.", 422},

@@ -8,6 +8,7 @@
 
 #include "display/profile.hpp"
 #include "display/scanout.hpp"
+#include "encode/io/json_text.hpp"
 
 namespace hdrd::display {
 namespace {
@@ -85,8 +86,11 @@ fs::path raw_path(const json& j, const fs::path& sidecar) {
 Result<EncodedFrame> read_dump(const fs::path& sidecar) {
   auto text = read_binary_file(sidecar, 16 << 20);
   if (!text) return text.error();
-  const json j = json::parse(text->begin(), text->end(), nullptr, false);
-  if (j.is_discarded() || !j.is_object()) return bad(sidecar, "", "not a JSON object (is this a dump's .json sidecar?)");
+  auto parsed = io::parse_json_bounded(std::string_view(reinterpret_cast<const char*>(text->data()), text->size()),
+                                       io::JsonBounds{16u << 20, 64, "sidecar", "dump.json_"});
+  if (!parsed) return bad(sidecar, "", parsed.error().message);
+  const json& j = *parsed;
+  if (!j.is_object()) return bad(sidecar, "", "not a JSON object (is this a dump's .json sidecar?)");
   const auto mode = parse_mode(j.value("mode", ""));
   if (!mode) return bad(sidecar, "mode", "no valid 'mode' (hdr10, hlg, scrgb, sdr, sdr-bt1886)");
   EncodedFrame f;

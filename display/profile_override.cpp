@@ -9,6 +9,7 @@
 #include <toml++/toml.h>
 
 #include "display/profile.hpp"
+#include "encode/io/json_text.hpp"
 
 namespace hdrd::display {
 namespace {
@@ -156,9 +157,9 @@ Result<ProfileOverride> load_profile_override(const std::filesystem::path& path)
   const std::string ext = path.extension().string();
   if (ext == ".toml") return parse_profile_override_toml(text, path.string());
   if (ext == ".json") {
-    json j = json::parse(text, nullptr, false);
-    if (j.is_discarded()) return bad(path.string(), "", "not valid JSON");
-    return parse_profile_override(j, path.string());
+    auto j = io::parse_json_bounded(text, io::JsonBounds{1u << 20, 64, "profile override", "profile.json_"});
+    if (!j) return bad(path.string(), "", j.error().message);
+    return parse_profile_override(*j, path.string());
   }
   return bad(path.string(), "", "profile overrides are .toml or .json files");
 }

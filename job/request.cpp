@@ -531,43 +531,24 @@ Result<FrameRequest> parse_request_json(const nlohmann::json& body, const ParseC
   }
 }
 
-int json_nesting_depth(std::string_view body) {
-  int depth = 0, max_depth = 0;
-  bool in_string = false, escaped = false;
-  for (char c : body) {
-    if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      max_depth = std::max(max_depth, ++depth);
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
-  return max_depth;
+io::JsonBounds request_json_bounds(const Limits& limits, std::string_view what) {
+  return io::JsonBounds{limits.max_body_bytes, limits.max_json_depth, what, "request."};
 }
 
+Result<nlohmann::json> parse_json_object_bounded(std::string_view text, const Limits& limits, std::string_view what) {
+  auto doc = io::parse_json_bounded(text, request_json_bounds(limits, what));
+  if (!doc) return doc.error();
+  if (!doc->is_object())
+    return make_error("request.type", fmt::format("{}: expected a JSON object, got {}", what, type_name(*doc)), "");
+  return doc;
+}
+
+// Size, NUL bytes, UTF-8 and nesting depth are bounded while the text is read (a deep
+// document is never built), and a number beyond double's range names its field.
 Result<FrameRequest> parse_request(std::string_view body, const ParseContext& ctx) {
-  if (body.size() > ctx.limits.max_body_bytes)
-    return make_error("request.limit", fmt::format("request body of {} bytes exceeds the limit of {} bytes", body.size(),
-                                                   ctx.limits.max_body_bytes), "");
-  if (const auto nul = body.find('\0'); nul != std::string_view::npos)
-    return make_error("request.syntax", fmt::format("request body has a NUL byte at offset {}", nul), "");
-  if (json_nesting_depth(body) > ctx.limits.max_json_depth)
-    return make_error("request.depth", fmt::format("request: JSON nested deeper than {} levels", ctx.limits.max_json_depth),
-                      "");
-  json doc;
-  try {
-    doc = json::parse(body.begin(), body.end());
-  } catch (const json::parse_error& e) {
-    return make_error("request.syntax", one_line(fmt::format("request body is not valid JSON: {}", e.what())), "");
-  } catch (const json::exception& e) {  // out_of_range.406: a number beyond double's range
-    return make_error("request.value", one_line(fmt::format("request body has an unusable value: {}", e.what())), "");
-  }
-  return parse_request_json(doc, ctx);
+  auto doc = parse_json_object_bounded(body, ctx.limits);
+  if (!doc) return doc.error();
+  return parse_request_json(*doc, ctx);
 }
 
 // ---- the other spellings ----------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/display_target.hpp"
+#include "encode/io/json_text.hpp"
 #include "encode/result.hpp"
 #include "job/settings.hpp"
 
@@ -91,10 +92,20 @@ struct FrameRequest {
 // The levels the request sets (unset: not given), for the levels resolver.
 LevelSettings request_levels(const FrameRequest& r);
 
-// Parses a JSON body (size, depth and syntax checked first), or an already parsed object.
-// Errors: request.syntax, request.depth, request.type, request.unknown_field,
-// request.value, request.limit, request.conflict, path.* — with the offending field's
-// JSON path, and a message naming it as the user spelled it.
+// The limits' bounds for a JSON request text (a body, a multipart 'request' part): codes
+// request.too_large, request.depth, request.syntax (malformed, a NUL byte, ill-formed
+// UTF-8), request.value (a number beyond double's range, naming its field); see
+// io::parse_json_bounded: depth is bounded while the text is read, never after.
+io::JsonBounds request_json_bounds(const Limits& limits, std::string_view what = "request");
+
+// A bounded JSON text that must be an object (request.type otherwise).
+Result<nlohmann::json> parse_json_object_bounded(std::string_view text, const Limits& limits,
+                                                 std::string_view what = "request");
+
+// Parses a JSON body (parse_json_object_bounded), or an already parsed object.
+// Errors: request.too_large, request.syntax, request.depth, request.type,
+// request.unknown_field, request.value, request.limit, request.conflict, path.* — with the
+// offending field's JSON path, and a message naming it as the user spelled it.
 Result<FrameRequest> parse_request(std::string_view body, const ParseContext& ctx);
 Result<FrameRequest> parse_request_json(const nlohmann::json& body, const ParseContext& ctx);
 
@@ -108,10 +119,6 @@ Result<nlohmann::json> query_to_request_json(const std::vector<std::pair<std::st
 // The label of a setting as a front end shows it: "--peak" on the CLI, "peak_nits" in a
 // query string, "display.peak_nits" in JSON.
 std::string label(std::string_view path, Spelling spelling);
-
-// Maximum nesting of JSON arrays/objects in `body` (strings skipped); a pre-check so that
-// absurdly deep documents are refused before the parser sees them.
-int json_nesting_depth(std::string_view body);
 
 // Decodes standard base64 (RFC 4648 §4, padding optional, no line breaks).
 Result<std::vector<std::uint8_t>> decode_base64(std::string_view text, std::size_t max_bytes);

@@ -1,28 +1,44 @@
 #!/usr/bin/env bash
-# Bounded soak of `hdrd serve`: N mixed requests (renders, encodes, patterns, self-tests,
-# dumps, GETs; 10 % malformed, some clients hanging up
-# mid-request) from C concurrent clients over a temporary Unix socket (nothing else is
-# reachable), then checks: the daemon never crashed and exits 0 on SIGTERM, its RSS grew
-# < 5 % between the end of the warm-up and the end, every well-formed request got a
-# correct answer, every malformed one a 4xx, and the dump directory holds no partial file.
-# Stops by itself. Not part of ctest (it takes minutes); docs/performance-daemon.md has
-# the numbers of the last run.
+# Soak of `hdrd serve` under normal load and under abuse, over a temporary Unix socket
+# (nothing else is reachable). Stops by itself; not part of ctest (it takes minutes);
+# docs/performance-daemon.md has the numbers of the last run.
 #
-# Usage: scripts/soak.sh [-n REQUESTS] [-c CLIENTS] [-w WARMUP] [-b BUILD_DIR]
+#  1. warm-up: W mixed requests (renders, encodes, patterns, self-tests, dumps, GETs);
+#     the RSS at its end is the reference.
+#  2. for T seconds, at once:
+#     - C clients keep sending the mix (10 % malformed, 3 % hanging up mid-request), and
+#       every answer is checked (size headers, PNG/EXR/raw form, sidecars);
+#     - abusers cycle through the classes of issue 14: slow headers and slow bodies (one
+#       byte a second), connection floods (1500 at once, held), multipart and JSON bodies
+#       nested 100 000 deep, a glTF nested 20 000 deep in the asset root, huge base64 UIs
+#       (a PNG declaring 16384 x 8192, random bytes at the size limit, a body over it),
+#       invalid UTF-8 and NUL in query parameters, symbolic and hard links in the asset
+#       root to files that are not EDIDs, a chunk-extension bomb, NUL bytes in bodies,
+#       and large frames near the memory budget;
+#     - a probe opens a new connection every 250 ms and times GET /v1/status;
+#     - the daemon's RSS is sampled every 100 ms.
+#  3. the load stops; after 5 s the RSS is read again.
+# Checks: no crash (alive, exit 0 on SIGTERM), no 5xx for a client's fault, every probe
+# answered and the worst under 1 s, RSS peak within warm-up + the memory budget, RSS
+# after within 20 % of the warm-up, every valid answer correct, no partial dump file.
+#
+# Usage: scripts/soak.sh [-t SECONDS] [-c CLIENTS] [-w WARMUP] [-m BUDGET_MIB] [-b BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-requests=10000
-clients=4
-warmup=1000
+seconds=120
+clients=3
+warmup=300
+budget_mib=1536
 build_dir=${BUILD_DIR:-build}
-while getopts "n:c:w:b:h" opt; do
+while getopts "t:c:w:m:b:h" opt; do
   case $opt in
-    n) requests=$OPTARG ;;
+    t) seconds=$OPTARG ;;
     c) clients=$OPTARG ;;
     w) warmup=$OPTARG ;;
+    m) budget_mib=$OPTARG ;;
     b) build_dir=$OPTARG ;;
-    *) sed -n '2,12p' "$0"; exit 2 ;;
+    *) sed -n '2,25p' "$0"; exit 2 ;;
   esac
 done
 
@@ -39,22 +55,27 @@ trap cleanup EXIT
 
 mkdir -p "$work/assets" "$work/dumps"
 printf '{}' > "$work/assets/empty.json"
+printf 'not an EDID\n' > "$work/assets/notes.txt"
+printf 'secret\n' > "$work/outside.txt"
+ln -s "$work/assets/notes.txt" "$work/assets/sym.bin"
+ln "$work/assets/notes.txt" "$work/assets/hard.bin"
+ln -s "$work/outside.txt" "$work/assets/escape.bin"
+python3 -c "import sys; d=20000; sys.stdout.write('{\"asset\":{\"version\":\"2.0\"},\"extras\":' + '['*d + ']'*d + '}')" \
+  > "$work/assets/deep.gltf"
 cat > "$work/hdrd.toml" <<EOF
 [server]
 socket_path = "$work/hdrd.sock"
-connection_timeout_s = 2
-max_connections = 256
 [workers]
 render_workers = 1
 encode_threads = 2
 queue_depth = 64
+memory_budget_bytes = $((budget_mib << 20))
 [paths]
 asset_root = "$work/assets"
 dump_dir = "$work/dumps"
 [limits]
-max_body_bytes = 65536
-max_upload_bytes = 1048576
-max_request_seconds = 60
+max_upload_bytes = 67108864
+max_request_seconds = 120
 [log]
 level = "warn"
 access_log = false
@@ -64,131 +85,132 @@ EOF
 daemon_pid=$!
 
 set +e
-python3 - "$work" "$daemon_pid" "$requests" "$clients" "$warmup" <<'PY'
-import http.client, json, os, random, socket, struct, sys, threading, time, zlib
+python3 - "$work" "$daemon_pid" "$seconds" "$clients" "$warmup" "$budget_mib" <<'PY'
+import base64, http.client, json, os, random, re, resource, socket, statistics, struct, sys, threading, time
 
-work, pid, total, clients, warmup = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+work, pid, seconds, clients, warmup, budget_mib = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 sock_path = os.path.join(work, "hdrd.sock")
+soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+resource.setrlimit(resource.RLIMIT_NOFILE, (hard, hard))
 
 class UnixConnection(http.client.HTTPConnection):
-    def __init__(self):
-        super().__init__("localhost", timeout=120)
+    def __init__(self, timeout=180):
+        super().__init__("localhost", timeout=timeout)
+        self._t = timeout
     def connect(self):
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        s.settimeout(120)
+        s.settimeout(self._t)
         s.connect(sock_path)
         self.sock = s
 
 def rss_kib():
-    with open(f"/proc/{pid}/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1])
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
     return -1
 
-for _ in range(600):
+def one(method, path, body=None, headers=None, timeout=180):
+    c = UnixConnection(timeout)
     try:
-        c = UnixConnection(); c.request("GET", "/v1/status"); r = c.getresponse(); r.read(); c.close()
-        if r.status == 200: break
+        c.request(method, path, body=body, headers=headers or {})
+        r = c.getresponse()
+        return r.status, dict((k.lower(), v) for k, v in r.getheaders()), r.read()
+    finally:
+        c.close()
+
+for _ in range(1200):
+    try:
+        if one("GET", "/v1/status", timeout=5)[0] == 200: break
     except OSError:
         time.sleep(0.05)
 else:
     sys.exit("soak: the daemon did not come up")
 
-# A tiny EXR for /v1/encode, made by the daemon itself (a render as image/x-exr).
-c = UnixConnection()
-c.request("POST", "/v1/render", json.dumps({"width": 32, "height": 18}), {"Accept": "image/x-exr"})
-r = c.getresponse(); exr = r.read(); c.close()
-assert r.status == 200, r.status
+status = json.loads(one("GET", "/v1/status")[2])
+have_renderer = status.get("renderer", {}).get("available", False)
+PNG_SIG = b"\x89PNG\r\n\x1a\n"
+
+# Inputs made by the daemon itself: a tiny EXR, and a 1920x1080 one for large uploads.
+def exr_of(w, h):
+    if have_renderer:
+        st, _, data = one("POST", "/v1/render", json.dumps({"width": w, "height": h}), {"Accept": "image/x-exr"})
+    else:
+        st, _, data = one("POST", "/v1/pattern", json.dumps({"pattern": "pq-ramp", "width": w, "height": h}), {"Accept": "image/x-exr"})
+    assert st == 200, st
+    return data
+exr = exr_of(32, 18)
+big_exr = exr_of(1920, 1080)
+
+def multipart(parts, boundary="hdrdSoakBoundary7"):
+    out = b""
+    for name, data in parts:
+        out += f"--{boundary}\r\nContent-Disposition: form-data; name=\"{name}\"\r\n\r\n".encode() + data + b"\r\n"
+    return out + f"--{boundary}--\r\n".encode(), f"multipart/form-data; boundary={boundary}"
 
 modes = ["hdr10", "hlg", "sdr", "sdr-bt1886", "scrgb"]
 def valid_request(rng):
     kind = rng.random()
-    if kind < 0.55:
+    if kind < 0.50 and have_renderer:
         w, h = rng.choice([(64, 36), (96, 54), (128, 72), (32, 18)])
         mode = rng.choice(modes)
-        body = {"width": w, "height": h, "display": {"mode": mode},
-                "exposure_comp_ev": rng.choice([-1, -0.5, 0, 0.5, 1])}
-        if rng.random() < 0.3:
-            body["tone"] = {"curve": rng.choice(["clip", "reinhard", "bt2390"])}
+        body = {"width": w, "height": h, "display": {"mode": mode}, "exposure_comp_ev": rng.choice([-1, -0.5, 0, 0.5, 1])}
+        if rng.random() < 0.3: body["tone"] = {"curve": rng.choice(["clip", "reinhard", "bt2390"])}
         accept = rng.choice(["image/png", "application/octet-stream", "image/x-exr"])
         if mode == "scrgb" and accept == "image/png": accept = "image/x-exr"
         return ("render", "POST", "/v1/render", json.dumps(body), {"Content-Type": "application/json", "Accept": accept}, (w, h))
-    if kind < 0.60:
+    if kind < 0.62:
         w, h = rng.choice([(64, 36), (96, 54), (192, 108)])
-        mode = rng.choice(["hdr10", "hlg"])
         name = rng.choice(["bt2111", "pq-ramp", "window", "near-black", "clipping", "sdr-grey"])
-        body = {"pattern": name, "width": w, "height": h, "display": {"mode": mode}}
+        body = {"pattern": name, "width": w, "height": h, "display": {"mode": rng.choice(["hdr10", "hlg"])}}
         if name == "window":
             body["params"] = {"level_nits": rng.choice([100, 203, 600, 1000]), "area_percent": rng.choice([1, 10, 25])}
         accept = rng.choice(["image/png", "application/octet-stream", "image/x-exr"])
         return ("pattern", "POST", "/v1/pattern", json.dumps(body), {"Content-Type": "application/json", "Accept": accept}, (w, h))
-    if kind < 0.605:
-        body = {"mode": rng.choice(["hdr10", "hlg", "sdr", "scrgb", "sdr-bt1886"]), "render": rng.random() < 0.5}
+    if kind < 0.625:
+        body = {"mode": rng.choice(["hdr10", "hlg", "sdr", "scrgb", "sdr-bt1886"]), "render": have_renderer and rng.random() < 0.5}
         return ("selftest", "POST", "/v1/selftest", json.dumps(body), {"Content-Type": "application/json"}, None)
-    if kind < 0.70:
+    if kind < 0.75:
         mode = rng.choice(modes)
         return ("encode", "POST", f"/v1/encode?mode={mode}", exr, {"Content-Type": "image/x-exr", "Accept": "application/octet-stream"}, (32, 18))
-    if kind < 0.75:
-        body = {"width": 32, "height": 18, "dump": True, "name": f"soak-{rng.randrange(20)}",
-                "formats": rng.choice([["png", "raw"], ["exr"], ["png", "exr", "raw"]])}
-        return ("dump", "POST", "/v1/render", json.dumps(body), {"Content-Type": "application/json", "Accept": "application/json"}, None)
+    if kind < 0.80:
+        options = {"dump": True, "name": f"soak-{rng.randrange(20)}", "formats": rng.choice([["png", "raw"], ["exr"], ["png", "exr", "raw"]])}
+        body, ct = multipart([("image", exr), ("request", json.dumps(options).encode())])
+        return ("dump", "POST", "/v1/encode", body, {"Content-Type": ct, "Accept": "application/json"}, None)
     path = rng.choice(["/v1/status", "/v1/capabilities", "/v1/displays", "/metrics"])
     return ("get", "GET", path, None, {}, None)
 
-def malformed_request(rng):
-    return rng.choice([
-        ("POST", "/v1/render", '{"width":64,', "application/json"),
-        ("POST", "/v1/render", '{"width":"64"}', "application/json"),
-        ("POST", "/v1/render", '{"widht":64}', "application/json"),
-        ("POST", "/v1/render", '{"width":100000000,"height":100000000}', "application/json"),
-        ("POST", "/v1/render", '{"gltf":"../../../etc/passwd"}', "application/json"),
-        ("POST", "/v1/render", '{"scene_file":"/etc/shadow"}', "application/json"),
-        ("POST", "/v1/render", '{"dump":true,"name":"../escape"}', "application/json"),
-        ("POST", "/v1/render", "[" * 100 + "]" * 100, "application/json"),
-        ("POST", "/v1/render", '{"scene":{"pad":"' + "x" * 70000 + '"}}', "application/json"),
-        ("POST", "/v1/render", "{}", "image/png"),
-        ("GET", "/v1/render", None, None),
-        ("DELETE", "/v1/status", None, None),
-        ("POST", "/v1/encode", "not an exr", "image/x-exr"),
-        ("POST", "/v1/encode?colour=red", "x", "image/x-exr"),
-        ("GET", "/nope", None, None),
-        ("POST", "/v1/pattern", '{"pattern":"smpte"}', "application/json"),
-        ("POST", "/v1/pattern", '{"pattern":"window","params":{"level":5}}', "application/json"),
-        ("POST", "/v1/pattern", '{"pattern":"bt2111","display":{"mode":"sdr"}}', "application/json"),
-        ("POST", "/v1/selftest", '{"mode":"hdr12"}', "application/json"),
-    ])
+MALFORMED = [
+    ("POST", "/v1/render", '{"width":64,', "application/json"),
+    ("POST", "/v1/render", '{"width":"64"}', "application/json"),
+    ("POST", "/v1/render", '{"widht":64}', "application/json"),
+    ("POST", "/v1/render", '{"width":100000000,"height":100000000}', "application/json"),
+    ("POST", "/v1/render", '{"gltf":"../../../etc/passwd"}', "application/json"),
+    ("POST", "/v1/render", '{"scene_file":"/etc/shadow"}', "application/json"),
+    ("POST", "/v1/render", '{"dump":true,"name":"../escape"}', "application/json"),
+    ("POST", "/v1/render", "[" * 100 + "]" * 100, "application/json"),
+    ("POST", "/v1/render", "{}", "image/png"),
+    ("GET", "/v1/render", None, None),
+    ("DELETE", "/v1/status", None, None),
+    ("POST", "/v1/encode", "not an exr", "image/x-exr"),
+    ("POST", "/v1/encode?colour=red", "x", "image/x-exr"),
+    ("GET", "/nope", None, None),
+    ("POST", "/v1/pattern", '{"pattern":"smpte"}', "application/json"),
+    ("POST", "/v1/pattern", '{"pattern":"window","params":{"level":5}}', "application/json"),
+    ("POST", "/v1/selftest", '{"mode":"hdr12"}', "application/json"),
+    ("POST", "/v1/render", '{"display":{"peak_nits":5e551}}', "application/json"),
+]
 
-def raw_abuse(rng):
-    """Truncated bodies, garbage and hang-ups mid-request; answers are not read."""
-    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    s.settimeout(5)
-    s.connect(sock_path)
-    choice = rng.random()
-    if choice < 0.4:    # a real render, then hang up before the answer
-        body = json.dumps({"width": 256, "height": 144, "exposure_comp_ev": rng.random()})
-        s.sendall(f"POST /v1/render HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n{body}".encode())
-        time.sleep(rng.random() * 0.05)
-    elif choice < 0.7:  # truncated body
-        s.sendall(b"POST /v1/render HTTP/1.1\r\nHost: x\r\nContent-Length: 500\r\n\r\n{\"width\":")
-    else:               # not HTTP
-        s.sendall(bytes(rng.randrange(256) for _ in range(64)) + b"\r\n\r\n")
-    s.close()
-
-PNG_SIG = b"\x89PNG\r\n\x1a\n"
-stats = {"ok": 0, "malformed_sent": 0, "malformed_4xx": 0, "abuse": 0, "busy_503": 0, "errors": []}
 lock = threading.Lock()
-counter = {"next": 0}
-rss_warm = {}
-
-def take():
+stats = {"ok": 0, "reconnects": 0, "malformed_sent": 0, "malformed_4xx": 0, "hangups": 0, "shed_503": 0, "errors": [],
+         "abuse": {}, "client_fault_5xx": [], "probe": [], "probe_failures": 0, "rss_peak_kib": 0}
+def note_abuse(cls, outcome):
     with lock:
-        n = counter["next"]
-        if n >= total: return None
-        counter["next"] = n + 1
-        if n == warmup:
-            rss_warm["kib"] = rss_kib()
-        return n
+        d = stats["abuse"].setdefault(cls, {})
+        d[outcome] = d.get(outcome, 0) + 1
 
 def check_frame(kind, headers, data, size):
     if kind in ("render", "encode", "pattern"):
@@ -198,50 +220,71 @@ def check_frame(kind, headers, data, size):
         ct = headers.get("content-type", "")
         if ct == "image/png":
             if not data.startswith(PNG_SIG) or struct.unpack(">II", data[16:24]) != (w, h) or not data.endswith(b"IEND\xaeB`\x82"):
-                return "render: bad PNG"
+                return f"{kind}: bad PNG"
         elif ct == "application/octet-stream":
-            if len(data) != int(headers["x-hdrd-stride"]) * h:
-                return "raw: wrong size"
+            if len(data) != int(headers["x-hdrd-stride"]) * h: return f"{kind}: raw of the wrong size"
         elif ct == "image/x-exr":
-            if not data.startswith(b"\x76\x2f\x31\x01"):
-                return "exr: bad magic"
+            if not data.startswith(b"\x76\x2f\x31\x01"): return f"{kind}: bad EXR magic"
     elif kind == "dump":
-        j = json.loads(data)
-        if not j.get("files"): return "dump: no files"
+        if not json.loads(data).get("files"): return "dump: no files"
     elif kind == "selftest":
         if not json.loads(data).get("passed"): return "selftest: a check failed"
     return None
 
-def worker(seed):
+phase = {"abuse": False, "stop": False, "count": 0}
+
+def worker(seed, limit=None):
     rng = random.Random(seed)
     conn = UnixConnection()
-    while True:
-        n = take()
-        if n is None: break
+    while not phase["stop"]:
+        with lock:
+            if limit is not None and phase["count"] >= limit: break
+            phase["count"] += 1
         r = rng.random()
         try:
             if r < 0.03:
-                raw_abuse(rng)
-                with lock: stats["abuse"] += 1
+                s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(5); s.connect(sock_path)
+                if have_renderer and rng.random() < 0.5:
+                    body = json.dumps({"width": 256, "height": 144, "exposure_comp_ev": rng.random()})
+                    s.sendall(f"POST /v1/render HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n{body}".encode())
+                    time.sleep(rng.random() * 0.05)
+                else:
+                    s.sendall(b"POST /v1/encode HTTP/1.1\r\nHost: x\r\nContent-Length: 500\r\n\r\nv/1")
+                s.close()
+                with lock: stats["hangups"] += 1
                 continue
             if r < 0.13:
-                method, path, body, ctype = malformed_request(rng)
-                hdrs = {"Content-Type": ctype} if ctype else {}
-                conn.request(method, path, body=body, headers=hdrs)
-                resp = conn.getresponse(); resp.read()
-                if resp.getheader("Connection", "").lower() == "close":
+                method, path, body, ctype = rng.choice(MALFORMED)
+                try:
+                    conn.request(method, path, body=body, headers={"Content-Type": ctype} if ctype else {})
+                    resp = conn.getresponse(); resp.read()
+                except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
                     conn.close(); conn = UnixConnection()
+                    with lock: stats["reconnects"] += 1
+                    conn.request(method, path, body=body, headers={"Content-Type": ctype} if ctype else {})
+                    resp = conn.getresponse(); resp.read()
+                if resp.getheader("Connection", "").lower() == "close": conn.close(); conn = UnixConnection()
                 with lock:
                     stats["malformed_sent"] += 1
                     if 400 <= resp.status < 500: stats["malformed_4xx"] += 1
-                    else: stats["errors"].append(f"malformed {method} {path} {body[:40] if body else ''} -> {resp.status}")
+                    else: stats["client_fault_5xx" if resp.status >= 500 else "errors"].append(f"malformed {method} {path} {(body or '')[:40]!r} -> {resp.status}")
                 continue
             kind, method, path, body, hdrs, size = valid_request(rng)
-            conn.request(method, path, body=body, headers=hdrs)
-            resp = conn.getresponse(); data = resp.read()
+            try:
+                conn.request(method, path, body=body, headers=hdrs)
+                resp = conn.getresponse(); data = resp.read()
+            except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
+                # The daemon may close an idle keep-alive connection (header deadline, or to
+                # make room during a flood); clients retry once on a new one, as
+                # hdrd_client.py and daemon::Client do.
+                conn.close(); conn = UnixConnection()
+                with lock: stats["reconnects"] += 1
+                conn.request(method, path, body=body, headers=hdrs)
+                resp = conn.getresponse(); data = resp.read()
             headers = {k.lower(): v for k, v in resp.getheaders()}
+            if resp.getheader("Connection", "").lower() == "close": conn.close(); conn = UnixConnection()
             if resp.status == 503:
-                with lock: stats["busy_503"] += 1
+                with lock: stats["shed_503"] += 1
                 continue
             problem = None if resp.status == 200 else f"{kind} {path} -> {resp.status} {data[:200]!r}"
             problem = problem or check_frame(kind, headers, data, size)
@@ -252,57 +295,226 @@ def worker(seed):
             conn.close(); conn = UnixConnection()
             with lock: stats["errors"].append(f"client exception: {e!r}")
 
+# ---- abuse classes: each returns after one round; outcome codes are counted -------------
+
+def expect(cls, st, body, want):
+    code = ""
+    try: code = json.loads(body)["error"]["code"]
+    except Exception: pass
+    if st >= 500 and st not in want:
+        with lock: stats["client_fault_5xx"].append(f"{cls} -> {st} {code or body[:80]!r}")
+    note_abuse(cls, f"{st} {code}" if st in want else f"UNEXPECTED {st} {code}")
+
+def raw_exchange(data, timeout=15):
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(timeout); s.connect(sock_path)
+    try:
+        try: s.sendall(data)
+        except OSError: pass
+        out = b""
+        while True:
+            try: b = s.recv(65536)
+            except OSError: break
+            if not b: break
+            out += b
+        return out
+    finally: s.close()
+
+def status_of(raw):
+    m = re.match(rb"HTTP/1\.1 (\d{3})", raw)
+    return (int(m.group(1)) if m else 0), raw.split(b"\r\n\r\n", 1)[-1]
+
+def slow(cls, header_only):
+    """16 connections sending one byte a second, until the daemon closes them."""
+    req = (b"GET /v1/status HTTP/1.1\r\nHost: x\r\nX-Pad: " + b"p" * 200 + b"\r\n\r\n") if header_only else \
+          (b"POST /v1/encode HTTP/1.1\r\nHost: x\r\nContent-Type: image/x-exr\r\nContent-Length: 100000\r\n\r\n" + b"v" * 200)
+    start = 0 if header_only else req.index(b"\r\n\r\n") + 4
+    socks = []
+    for _ in range(16):
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.connect(sock_path); s.setblocking(False)
+        if start: s.sendall(req[:start])
+        socks.append(s)
+    t0 = time.time(); i = start; open_ = set(range(len(socks))); held = []
+    while open_ and not phase["stop"] and i < len(req):
+        for k in list(open_):
+            try:
+                socks[k].send(req[i:i + 1])
+                if socks[k].recv(4096, socket.MSG_PEEK) == b"": raise OSError
+            except BlockingIOError: pass
+            except OSError:
+                open_.discard(k); held.append(time.time() - t0)
+        i += 1; time.sleep(1.0)
+    for k, s in enumerate(socks):
+        if k in open_: note_abuse(cls, "still open when the round ended")
+        s.close()
+    for h in held: note_abuse(cls, "closed within 13 s" if h < 13 else f"held {h:.0f} s")
+
+def flood(cls):
+    socks = []
+    for _ in range(1500):
+        try:
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(2); s.connect(sock_path); socks.append(s)
+        except OSError: note_abuse(cls, "connect refused"); break
+    time.sleep(3)
+    for s in socks: s.close()
+    note_abuse(cls, f"{len(socks)} opened and held 3 s")
+
+def png_declaring(w, h):
+    import zlib
+    def chunk(t, d): return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    return PNG_SIG + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)) + chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b"")
+
+def abuse_round(rng, k):
+    cls = k % 14
+    if cls == 0: slow("slow headers", True)
+    elif cls == 1: slow("slow bodies", False)
+    elif cls == 2: flood("connection flood")
+    elif cls == 3:
+        body, ct = multipart([("image", exr), ("request", b"[" * 100000 + b"]" * 100000)])
+        st, _, b = one("POST", "/v1/encode", body, {"Content-Type": ct}); expect("multipart deep JSON", st, b, {400})
+    elif cls == 4:
+        st, _, b = one("POST", "/v1/render", "[" * 100000 + "]" * 100000, {"Content-Type": "application/json"}); expect("deep JSON body", st, b, {400})
+    elif cls == 5 and have_renderer:
+        st, _, b = one("POST", "/v1/render", json.dumps({"gltf": "deep.gltf", "width": 32, "height": 18}), {"Content-Type": "application/json"})
+        expect("deep glTF in the asset root", st, b, {422})
+    elif cls == 6:
+        png = base64.b64encode(png_declaring(16384, 8192)).decode()
+        body, ct = multipart([("image", exr), ("request", json.dumps({"ui": {"png_base64": png}}).encode())])
+        st, _, b = one("POST", "/v1/encode", body, {"Content-Type": ct}); expect("base64 PNG declaring 16384x8192", st, b, {400})
+        junk = base64.b64encode(os.urandom(6 << 20)).decode()
+        body, ct = multipart([("image", exr), ("request", json.dumps({"ui": {"png_base64": junk}}).encode())])
+        st, _, b = one("POST", "/v1/encode", body, {"Content-Type": ct}); expect("6 MiB of random base64", st, b, {400, 413, 422})
+        st, _, b = one("POST", "/v1/render", json.dumps({"ui": {"png_base64": "A" * (17 << 20)}}), {"Content-Type": "application/json"})
+        expect("base64 body over the limit", st, b, {413})
+    elif cls == 7:
+        p = rng.choice(["mode", "peak_nits", "curve", "name", "exposure", "dump", "bits", "gamut"])
+        v = rng.choice(["%ff", "%c0%af", "hdr10%00", "%ed%a0%80", "%fe%ff"])
+        st, _, b = one("POST", f"/v1/encode?{p}={v}", exr, {"Content-Type": "image/x-exr"}); expect("invalid UTF-8 / NUL in a query", st, b, {400})
+    elif cls == 8:
+        for name, want in (("sym.bin", {422}), ("hard.bin", {422}), ("escape.bin", {403})):
+            body, ct = multipart([("image", exr), ("request", json.dumps({"display": {"edid": name}}).encode())])
+            st, _, b = one("POST", "/v1/encode", body, {"Content-Type": ct}); expect(f"link in the asset root ({name})", st, b, want)
+    elif cls == 9:
+        st, b = status_of(raw_exchange(b"POST /v1/encode HTTP/1.1\r\nHost: x\r\nContent-Type: image/x-exr\r\nTransfer-Encoding: chunked\r\n\r\n1;" + b"a" * 300000))
+        expect("chunk-extension bomb", st, b, {411})
+    elif cls == 10:
+        st, _, b = one("POST", "/v1/render", b'{"width":64}\0garbage', {"Content-Type": "application/json"}); expect("NUL in a JSON body", st, b, {400})
+    elif cls in (11, 12):
+        # Large valid frames, near the budget: answered, or shed with 503 queue.* (not a fault).
+        if have_renderer and cls == 11:
+            st, _, b = one("POST", "/v1/render", json.dumps({"width": 1920, "height": 1080, "samples": 4}), {"Content-Type": "application/json", "Accept": "image/x-exr"})
+        else:
+            st, _, b = one("POST", "/v1/encode?mode=hdr10", big_exr, {"Content-Type": "image/x-exr", "Accept": "image/x-exr"})
+        if st == 503:
+            code = json.loads(b)["error"]["code"]
+            note_abuse("large frames", f"503 {code}")
+            if not code.startswith("queue."):
+                with lock: stats["errors"].append(f"large frame -> 503 {code}")
+        else:
+            note_abuse("large frames", str(st))
+            if st != 200:
+                with lock: stats["errors"].append(f"large frame -> {st} {b[:120]!r}")
+    elif cls == 13:
+        st, _, b = one("GET", "/v1/status?x=%ff"); expect("invalid UTF-8 in a GET query", st, b, {400})
+
+def abuser(seed):
+    rng = random.Random(seed); k = seed
+    while not phase["stop"]:
+        try: abuse_round(rng, k)
+        except (OSError, http.client.HTTPException) as e:
+            note_abuse("client-side exception", type(e).__name__)
+        k += 3
+
+def prober():
+    while not phase["stop"]:
+        t0 = time.time()
+        try:
+            st = one("GET", "/v1/status", timeout=5)[0]
+            ok = st == 200
+        except (OSError, http.client.HTTPException):
+            ok = False
+        dt = time.time() - t0
+        with lock:
+            if phase["abuse"]: stats["probe"].append(dt)
+            if not ok and phase["abuse"]: stats["probe_failures"] += 1
+        time.sleep(max(0.0, 0.25 - dt))
+
+def sampler():
+    while not phase["stop"]:
+        r = rss_kib()
+        with lock: stats["rss_peak_kib"] = max(stats["rss_peak_kib"], r)
+        time.sleep(0.1)
+
+# ---- 1. warm-up -----------------------------------------------------------------------
+t_start = time.time()
+ws = [threading.Thread(target=worker, args=(i, warmup)) for i in range(clients)]
+for t in ws: t.start()
+for t in ws: t.join()
+time.sleep(1.0)
+rss_warm = rss_kib()
+stats["rss_peak_kib"] = rss_warm
+
+# ---- 2. load and abuse ----------------------------------------------------------------
+phase["abuse"] = True
+threads = [threading.Thread(target=sampler), threading.Thread(target=prober)]
+threads += [threading.Thread(target=worker, args=(1000 + i,)) for i in range(clients)]
+threads += [threading.Thread(target=abuser, args=(i,)) for i in range(3)]
 load_start = os.getloadavg()
 t0 = time.time()
-threads = [threading.Thread(target=worker, args=(i,)) for i in range(clients)]
 for t in threads: t.start()
+time.sleep(seconds)
+phase["stop"] = True
 for t in threads: t.join()
 elapsed = time.time() - t0
-time.sleep(0.5)
-rss_end = rss_kib()
+
+# ---- 3. after the burst -----------------------------------------------------------------
+time.sleep(5.0)
+rss_after = rss_kib()
 alive = os.path.exists(f"/proc/{pid}")
 
-# No partial files: only finished dump files (NAME.png/.exr/.raw/.json, no temporaries),
-# each complete: PNGs end with IEND, EXRs start with the magic number, raw buffers have a
-# whole frame (32x18 at 4 or 8 bytes per pixel), sidecars parse and name existing files.
-# (Names are reused on purpose, so a name may keep files of an earlier dump's formats.)
-import re
+# No partial files: finished dump files only (NAME.png/.exr/.raw/.json), each complete.
 dumps = os.path.join(work, "dumps")
 names = sorted(os.listdir(dumps))
 partial = []
 for n in names:
-    path = os.path.join(dumps, n)
     m = re.fullmatch(r"soak-\d+\.(png|exr|raw|json)", n)
-    if not m:
-        partial.append(n); continue
-    d = open(path, "rb").read()
-    ext = m.group(1)
-    complete = {
-        "png": lambda: d.startswith(PNG_SIG) and d.endswith(b"IEND\xaeB`\x82"),
-        "exr": lambda: d.startswith(b"\x76\x2f\x31\x01") and len(d) > 300,
-        "raw": lambda: len(d) in (32 * 18 * 4, 32 * 18 * 8),
-        "json": lambda: all(os.path.exists(os.path.join(dumps, p)) for p in json.loads(d)["files"].values()),
-    }[ext]()
+    if not m: partial.append(n); continue
+    d = open(os.path.join(dumps, n), "rb").read()
+    complete = {"png": lambda: d.startswith(PNG_SIG) and d.endswith(b"IEND\xaeB`\x82"),
+                "exr": lambda: d.startswith(b"\x76\x2f\x31\x01") and len(d) > 300,
+                "raw": lambda: len(d) in (32 * 18 * 4, 32 * 18 * 8),
+                "json": lambda: all(os.path.exists(os.path.join(dumps, p)) for p in json.loads(d)["files"].values())}[m.group(1)]()
     if not complete: partial.append(n)
 
-growth = 100.0 * (rss_end - rss_warm["kib"]) / rss_warm["kib"] if rss_warm.get("kib") else float("nan")
+probe = sorted(stats["probe"])
+budget_kib = budget_mib * 1024
 summary = {
-    "requests": total, "clients": clients, "seconds": round(elapsed, 1), "requests_per_s": round(total / elapsed, 1),
+    "abuse_seconds": round(elapsed, 1), "clients": clients, "renderer": have_renderer,
     "load_average_start": [round(x, 2) for x in load_start], "load_average_end": [round(x, 2) for x in os.getloadavg()],
-    "ok": stats["ok"], "malformed_sent": stats["malformed_sent"], "malformed_4xx": stats["malformed_4xx"], "hangups_and_garbage": stats["abuse"],
-    "busy_503": stats["busy_503"], "errors": len(stats["errors"]), "daemon_alive": alive,
-    "rss_after_warmup_kib": rss_warm.get("kib"), "rss_end_kib": rss_end, "rss_growth_percent": round(growth, 2),
+    "valid_ok": stats["ok"], "malformed_sent": stats["malformed_sent"], "malformed_4xx": stats["malformed_4xx"],
+    "hangups": stats["hangups"], "shed_503": stats["shed_503"], "reconnects": stats["reconnects"],
+    "errors": len(stats["errors"]),
+    "client_fault_5xx": len(stats["client_fault_5xx"]), "abuse": stats["abuse"],
+    "probes": len(probe), "probe_failures": stats["probe_failures"],
+    "probe_median_ms": round(1e3 * statistics.median(probe), 1) if probe else None,
+    "probe_p99_ms": round(1e3 * probe[int(0.99 * (len(probe) - 1))], 1) if probe else None,
+    "probe_worst_ms": round(1e3 * probe[-1], 1) if probe else None,
+    "daemon_alive": alive, "memory_budget_mib": budget_mib,
+    "rss_warm_kib": rss_warm, "rss_peak_kib": stats["rss_peak_kib"], "rss_after_kib": rss_after,
+    "rss_peak_over_warm_mib": round((stats["rss_peak_kib"] - rss_warm) / 1024, 1),
+    "rss_after_vs_warm_percent": round(100.0 * (rss_after - rss_warm) / rss_warm, 1),
     "dump_files": len(names), "partial_files": partial,
 }
 print(json.dumps(summary, indent=2))
-for e in stats["errors"][:20]: print("  error:", e, file=sys.stderr)
-ok = alive and not stats["errors"] and not partial and growth < 5.0
+for e in (stats["errors"] + stats["client_fault_5xx"])[:30]: print("  problem:", e, file=sys.stderr)
+ok = (alive and not stats["errors"] and not stats["client_fault_5xx"] and not partial and probe and
+      stats["probe_failures"] == 0 and probe[-1] < 1.0 and
+      stats["rss_peak_kib"] - rss_warm <= budget_kib and rss_after <= 1.2 * rss_warm and
+      all(not k.startswith("UNEXPECTED") for d in stats["abuse"].values() for k in d))
 sys.exit(0 if ok else 1)
 PY
 py_status=$?
 set -e
 
-# The daemon must still be alive, then drain and exit 0 on SIGTERM.
 if ! kill -0 "$daemon_pid" 2>/dev/null; then
   echo "soak: FAILED: the daemon died" >&2; tail -20 "$work/daemon.log" >&2; exit 1
 fi
@@ -313,5 +525,5 @@ rc=$?
 set -e
 daemon_pid=""
 if [ $rc -ne 0 ]; then echo "soak: FAILED: hdrd exited $rc after SIGTERM" >&2; tail -20 "$work/daemon.log" >&2; exit 1; fi
-if [ $py_status -ne 0 ]; then echo "soak: FAILED (see above)" >&2; exit 1; fi
-echo "soak: passed (0 crashes, clean SIGTERM exit)"
+if [ $py_status -ne 0 ]; then echo "soak: FAILED (see above)" >&2; tail -5 "$work/daemon.log" >&2; exit 1; fi
+echo "soak: passed (0 crashes, 0 5xx for client faults, clean SIGTERM exit)"

@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include "encode/io/json_text.hpp"
 #include "shading/gltf_internal.hpp"
 #include "shading/shapes.hpp"
 
@@ -23,6 +24,9 @@ namespace {
 constexpr std::uint64_t kMaxFileBytes = 1ULL << 30;  // tinygltf takes an unsigned int length
 constexpr std::size_t kMaxAccessorCount = 1u << 26;
 constexpr int kMaxNodeDepth = 128;
+// glTF's own structure nests six levels (materials[i].pbrMetallicRoughness.baseColorTexture
+// .extensions.KHR_texture_transform.offset); "extras" may add some.
+constexpr int kMaxJsonDepth = 64;
 
 Error gltf_error(std::string what) { return make_error("gltf.invalid", std::move(what)); }
 
@@ -107,11 +111,17 @@ std::optional<std::string_view> gltf_json_text(std::span<const std::uint8_t> byt
   return std::string_view(reinterpret_cast<const char*>(bytes.data()) + 20, json_len);
 }
 
-Result<void> check_buffer_views(std::span<const std::uint8_t> bytes) {
+// The JSON is read here first, bounded (tinygltf converts "extras" into its own values
+// with one recursive call per level: 20 000 nested arrays overflowed the stack), so that
+// no text tinygltf sees is deeper than kMaxJsonDepth, has a NUL byte (which would end it
+// early) or a number beyond double's range.
+Result<void> check_json_and_buffer_views(std::span<const std::uint8_t> bytes) {
   const auto text = gltf_json_text(bytes);
   if (!text) return {};  // a broken GLB container: tinygltf reports it
-  const auto j = nlohmann::json::parse(*text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) return {};  // tinygltf reports the syntax error
+  auto parsed = io::parse_json_bounded(*text, io::JsonBounds{kMaxFileBytes, kMaxJsonDepth, "glTF", "gltf.json_"});
+  if (!parsed) return parsed.error();
+  const nlohmann::json& j = *parsed;
+  if (!j.is_object()) return gltf_error("the glTF JSON is not an object");
   const auto length = [](const nlohmann::json& o, const char* key) -> std::optional<std::uint64_t> {
     const auto it = o.find(key);
     if (it == o.end()) return std::uint64_t{0};
@@ -544,7 +554,7 @@ Result<tinygltf::Model> parse(std::span<const std::uint8_t> bytes, const std::fi
                               const SceneLoadOptions& options, std::vector<std::string>& warnings) {
   if (bytes.size() > kMaxFileBytes) return gltf_error("glTF file is larger than 1 GiB");
   if (bytes.empty()) return gltf_error("glTF file is empty");
-  if (auto ok = check_buffer_views(bytes); !ok) return ok.error();
+  if (auto ok = check_json_and_buffer_views(bytes); !ok) return ok.error();
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&guarded_image_loader, nullptr);
   std::error_code ec;

@@ -468,6 +468,53 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
   return out;
 }
 
+void Renderer::release_frame_targets() {
+  CurrentContext current(*context_);
+  if (!current.status()) return;  // no context: nothing can be deleted, nothing was made
+  Impl& r = *impl_;
+  const GlApi& gl = *r.gl;
+  r.targets = Targets{};
+  r.reduced = GlName{};
+  r.reduced_fbo = GlName{};
+  r.reduced_width = r.reduced_height = 0;
+  r.has_frame = false;
+
+  // Deleting the names is not enough: Mesa's state tracker keeps the last draw's
+  // framebuffer surfaces and sampler views referenced until another draw replaces them
+  // (measured on llvmpipe: a 1080p 4x MSAA frame's 200 MiB stayed until the next frame of
+  // another size). So one draw into a 1x1 target, sampling a 1x1 texture on unit 0 (where
+  // the resolve pass sampled the MSAA colour), drops those references; then both go.
+  {
+    GlName target = gen_texture(gl), source = gen_texture(gl), fbo = gen_framebuffer(gl), depth = gen_renderbuffer(gl);
+    for (const GlName* t : {&target, &source}) {
+      gl.BindTexture(GL_TEXTURE_2D, t->id());
+      gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8, 1, 1);
+    }
+    gl.BindRenderbuffer(GL_RENDERBUFFER, depth.id());
+    gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, 0, GL_DEPTH_COMPONENT32F, 1, 1);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+    gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, target.id(), 0);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth.id());
+    gl.Viewport(0, 0, 1, 1);
+    gl.Enable(GL_DEPTH_TEST);
+    gl.UseProgram(r.reduce_program.id());
+    gl.ActiveTexture(GL_TEXTURE0);
+    gl.BindTexture(GL_TEXTURE_2D, source.id());
+    gl.BindVertexArray(r.empty_vao.id());
+    for (int i = 0; i < 4; ++i) {  // llvmpipe keeps a few binned scenes; cycle through them
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.Finish();
+    }
+    gl.Disable(GL_DEPTH_TEST);
+    gl.BindVertexArray(0);
+    gl.UseProgram(0);
+    gl.BindTexture(GL_TEXTURE_2D, 0);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, 0);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+  gl.Finish();
+}
+
 Result<Image> Renderer::read_frame() {
   Impl& r = *impl_;
   if (!r.has_frame) return make_error("render.no_frame", "nothing rendered yet");

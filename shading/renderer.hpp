@@ -113,6 +113,12 @@ class Renderer {
   // The full float frame of the last render (e.g. after a reduced readback).
   Result<Image> read_frame();
 
+  // Frees the render targets kept for the next frame of the same size (and the last
+  // frame with them: read_frame() and post passes need a new render). A service calls it
+  // after a large frame, whose targets (20 B/px, and as much again per MSAA sample) would
+  // otherwise stay resident until a frame of another size.
+  void release_frame_targets();
+
   const GlContext& context() const { return *context_; }
   std::string backend_name() const { return context_->backend_name(); }
 

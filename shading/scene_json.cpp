@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "encode/io/json_text.hpp"
 #include "shading/gltf_internal.hpp"
 #include "shading/materials.hpp"
 #include "shading/scene_loader.hpp"
@@ -17,6 +18,9 @@ using nlohmann::json;
 
 constexpr int kFormatVersion = 1;
 constexpr std::size_t kMaxMeshVertices = 4'000'000;
+// The format nests five levels (objects[i].mesh.positions[j]); 64 leaves room for any
+// reasonable document and none for one built to exhaust the stack.
+constexpr int kMaxSceneJsonDepth = 64;
 
 // Reads fields with a sticky first error: after a failure every read returns its
 // default, and the caller checks failed() once per object.
@@ -465,16 +469,11 @@ Result<Scene> parse_scene_json(const nlohmann::json& doc, const SceneLoadOptions
 }
 
 Result<Scene> parse_scene_json_text(std::string_view text, const SceneLoadOptions& options) {
-  json doc = json::parse(text.begin(), text.end(), nullptr, false);
-  if (doc.is_discarded()) {
-    // Parse again with exceptions for the position of the syntax error.
-    try {
-      doc = json::parse(text.begin(), text.end());
-    } catch (const json::parse_error& e) {
-      return make_error("scene.json_syntax", fmt::format("scene is not valid JSON: {}", e.what()));
-    }
-  }
-  return parse_scene_json(doc, options);
+  // Bounded before anything is built (a deep text would crash whatever recurses on it
+  // later), and a number beyond double's range is an error naming its field.
+  auto doc = io::parse_json_bounded(text, io::JsonBounds{kMaxSceneJsonBytes, kMaxSceneJsonDepth, "scene", "scene.json_"});
+  if (!doc) return doc.error();
+  return parse_scene_json(*doc, options);
 }
 
 }  // namespace hdrd::shading

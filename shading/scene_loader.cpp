@@ -8,8 +8,6 @@
 namespace hdrd::shading {
 namespace {
 
-constexpr std::uintmax_t kMaxJsonBytes = 256u << 20;
-
 bool has_extension(const std::filesystem::path& p, std::string_view ext) {
   std::string e = p.extension().string();
   for (auto& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -20,7 +18,7 @@ Result<Scene> load_json_file(const std::filesystem::path& path, const SceneLoadO
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) return make_error("scene.file", fmt::format("cannot read '{}': {}", path.string(), ec.message()), "scene");
-  if (size > kMaxJsonBytes) return make_error("scene.file", fmt::format("'{}' is larger than 256 MiB", path.string()), "scene");
+  if (size > kMaxSceneJsonBytes) return make_error("scene.file", fmt::format("'{}' is larger than 256 MiB", path.string()), "scene");
   std::ifstream f(path, std::ios::binary);
   std::stringstream ss;
   ss << f.rdbuf();

@@ -40,6 +40,7 @@ bool is_builtin_scene(std::string_view name);
 Result<Scene> make_builtin_scene(std::string_view name);
 
 // ---- JSON scenes ---------------------------------------------------------------------------
+inline constexpr std::size_t kMaxSceneJsonBytes = 256u << 20;  // a scene file or text, at most
 // Strict: unknown fields, wrong types, non-finite numbers and absurd counts are errors
 // naming the field ("lights[2].illuminance_lux: ...").
 Result<Scene> parse_scene_json(const nlohmann::json& doc, const SceneLoadOptions& options = {});

@@ -89,9 +89,19 @@ class TempFile {
   fs::path temp_, final_;
 };
 
+// A full file system is named as such (the directory, not only the file): it is the
+// operator's to fix, and the daemon answers it 507 rather than 500.
 Error write_error(const fs::path& path, const std::string& what, int err) {
+  if (err == ENOSPC || err == EDQUOT) {
+    const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    return make_error("io.no_space", fmt::format("cannot write {}: the file system holding {} is full ({})",
+                                                 path.filename().string(), dir.string(), errno_text(err)));
+  }
   return make_error("io.write", fmt::format("cannot write {}: {} ({})", path.string(), what, errno_text(err)));
 }
+
+constexpr std::string_view kTempMarker = ".tmp-";
+constexpr std::size_t kTempDigits = 12;
 
 }  // namespace
 
@@ -101,7 +111,7 @@ Result<int> create_temp_file(const fs::path& final_path, fs::path& temp) {
   static thread_local std::mt19937_64 rng{std::random_device{}()};
   const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
   for (int attempt = 0; attempt < 16; ++attempt) {
-    temp = dir / fmt::format(".{}.tmp-{:012x}", final_path.filename().string(), rng() & 0xffffffffffffull);
+    temp = dir / fmt::format(".{}{}{:012x}", final_path.filename().string(), kTempMarker, rng() & 0xffffffffffffull);
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) return fd;
     if (errno != EEXIST) return write_error(final_path, "cannot create a temporary file", errno);
@@ -191,6 +201,13 @@ Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files, const W
     temps.push_back(std::move(t.value()));
   }
   return commit_all(temps, write.durable);
+}
+
+bool is_atomic_write_temporary(std::string_view name) {
+  if (name.size() < 1 + 1 + kTempMarker.size() + kTempDigits || name.front() != '.') return false;
+  const std::string_view digits = name.substr(name.size() - kTempDigits);
+  if (name.substr(name.size() - kTempDigits - kTempMarker.size(), kTempMarker.size()) != kTempMarker) return false;
+  return digits.find_first_not_of("0123456789abcdef") == std::string_view::npos;
 }
 
 Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes, const WriteOptions& write) {

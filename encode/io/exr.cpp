@@ -570,7 +570,8 @@ std::string scan_attributes(ByteReader& r, std::size_t max_name, PartShape& part
   }
 }
 
-Result<void> prescan_header(std::span<const std::uint8_t> bytes, const std::string& name) {
+// Returns the pixel count of the largest part (what a read may decode).
+Result<std::int64_t> prescan_header(std::span<const std::uint8_t> bytes, const std::string& name) {
   if (bytes.size() < 8) return exr_error(name, "exr.truncated", "truncated file (no version field)");
   ByteReader r(bytes);
   const std::int32_t version = r.i32_at(4);
@@ -585,18 +586,19 @@ Result<void> prescan_header(std::span<const std::uint8_t> bytes, const std::stri
     parts.push_back(part);
   } while (multipart && !r.at_end() && r.peek() != 0 && parts.size() < 1024);
   if (multipart && !r.at_end()) r.skip(1);  // the empty header that ends the list
-  std::int64_t chunks = 0;
+  std::int64_t chunks = 0, largest = 0;
   for (const PartShape& p : parts) {
     if (!p.data_window) continue;  // OpenEXR reports the missing attribute
     const auto& d = *p.data_window;
     const std::int64_t w = std::int64_t{d[2]} - d[0] + 1, h = std::int64_t{d[3]} - d[1] + 1;
     if (auto size = check_image_size(w, h); !size) return exr_error(name, "exr.size", size.error().message);
     chunks += std::max<std::int64_t>(min_chunks(p, w, h), 0);
+    largest = std::max(largest, w * h);
   }
   if (chunks > static_cast<std::int64_t>(r.left() / 8))
     return exr_error(name, "exr.truncated",
                      fmt::format("truncated file (the header needs {} chunk offsets, {} bytes remain)", chunks, r.left()));
-  return {};
+  return largest;
 }
 
 Result<ExrImage> read_exr_bytes(std::span<const std::uint8_t> bytes, const std::string& name,
@@ -632,6 +634,12 @@ Result<ExrImage> read_exr(const fs::path& path, const ExrReadOptions& options) {
 
 Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options) {
   return read_exr_bytes(bytes, "<memory>", options);
+}
+
+Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
+    return exr_error("<memory>", "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
+  return prescan_header(bytes, "<memory>");
 }
 
 // ---- writing ---------------------------------------------------------------------------

@@ -59,6 +59,9 @@ struct ExrReadOptions {
 };
 Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {});
 Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options = {});
+// The pixels the largest part of an EXR declares (its data window), from the header alone:
+// what decoding it would allocate, known before anything is decoded.
+Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes);
 
 struct ExrWriteOptions {
   bool half = true;  // half or float32 channels
@@ -110,10 +113,32 @@ struct PngInfo {
 Result<PngInfo> read_png_info(const std::filesystem::path& path);
 Result<PngInfo> read_png_info_memory(std::span<const std::uint8_t> bytes);
 
+// What a PNG declares in its IHDR chunk (PNG spec §11.2.2), read without decoding anything:
+// nullopt when the bytes do not start with a PNG signature and an IHDR.
+struct PngHeader {
+  std::uint32_t width = 0, height = 0;
+  int bit_depth = 0, color_type = 0;
+};
+std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes);
+
+// The largest image a caller accepts; checked against the declared size before libpng
+// allocates or decodes (a 21 KB PNG may declare 16384 x 8192 pixels: 3 GiB as floats).
+struct PngLimits {
+  std::int64_t max_width = kMaxImageDimension;
+  std::int64_t max_height = kMaxImageDimension;
+  std::int64_t max_pixels = kMaxImagePixels;
+};
+
 // UI overlay: any 8/16-bit PNG (grey, grey+alpha, palette, RGB, RGBA) to RGBA floats in [0,1],
-// sRGB-encoded, straight alpha unless `premultiplied` is declared.
-Result<OverlayImage> read_overlay_png(const std::filesystem::path& path, bool premultiplied = false);
-Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied = false);
+// sRGB-encoded, straight alpha unless `premultiplied` is declared. png.size when the PNG
+// declares more than `limits`.
+Result<OverlayImage> read_overlay_png(const std::filesystem::path& path, bool premultiplied = false,
+                                      const PngLimits& limits = {});
+Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied = false,
+                                             const PngLimits& limits = {});
+// Decoded bytes an overlay of w x h holds at most while it is read (the float image and
+// libpng's 16-bit rows), for memory estimates.
+std::uint64_t overlay_decode_bytes(std::uint32_t width, std::uint32_t height);
 
 // ---- Raw buffers and sidecars -----------------------------------------------------------
 Result<void> write_raw(const std::filesystem::path& path, const EncodedFrame& frame, const WriteOptions& write = {});
@@ -144,6 +169,10 @@ Result<void> write_all_or_nothing(const std::vector<FileToWrite>& files, const W
 // container primaries, half float, scaled so that value x whiteLuminance = cd/m2 (scRGB:
 // nits / 80, whiteLuminance 80; otherwise nits / paper white, whiteLuminance = paper white).
 Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame);
+
+// Whether a file name is one of the temporaries atomic writes create (".NAME.tmp-" and 12
+// hex digits) and rename or remove; one left behind belongs to a writer that was killed.
+bool is_atomic_write_temporary(std::string_view filename);
 
 enum class DumpFormat { png, exr, raw };
 std::optional<DumpFormat> parse_dump_format(std::string_view s);

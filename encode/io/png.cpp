@@ -37,6 +37,7 @@ struct PngErrorState {
   std::string warnings;  // libpng explains some errors in a warning first ("... exceeds user limit")
   bool truncated = false;
   bool out_of_memory = false;
+  PngLimits limits;  // what the reader accepts, for the message
 };
 
 [[noreturn]] void on_png_error(png_structp png, png_const_charp message) {
@@ -447,6 +448,7 @@ struct PngReadJob {
   std::span<const std::uint8_t> bytes;
   std::size_t pos = 0;
   bool overlay = false;  // expand to RGBA for a UI overlay
+  PngLimits limits;
   PngErrorState error;
   // after the header
   png_uint_32 width = 0, height = 0;
@@ -472,7 +474,8 @@ bool read_header(png_structp png, png_infop info, PngReadJob& job) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_set_read_fn(png, &job, read_bytes);
   // Size limits before libpng allocates anything for the image (image.hpp limits).
-  png_set_user_limits(png, kMaxImageDimension, kMaxImageDimension);
+  png_set_user_limits(png, png_uint_32(std::min<std::int64_t>(job.limits.max_width, kMaxImageDimension)),
+                      png_uint_32(std::min<std::int64_t>(job.limits.max_height, kMaxImageDimension)));
   png_set_chunk_malloc_max(png, 8u << 20);
   png_set_chunk_cache_max(png, 64);
   png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_ALWAYS,
@@ -504,8 +507,8 @@ Error png_read_error(const std::string& name, const PngErrorState& e) {
   if (e.truncated) return make_error("png.truncated", fmt::format("cannot read PNG {}: truncated file", name));
   if (e.message.find("exceeds user limit") != std::string::npos ||
       e.warnings.find("exceeds user limit") != std::string::npos)
-    return make_error("png.size", fmt::format("cannot read PNG {}: image larger than {} pixels per side", name,
-                                              kMaxImageDimension));
+    return make_error("png.size", fmt::format("cannot read PNG {}: image larger than {}x{} pixels", name,
+                                              e.limits.max_width, e.limits.max_height));
   return make_error("png.corrupt", fmt::format("cannot read PNG {}: corrupt file ({})", name,
                                                e.message.empty() ? "libpng failed" : e.message));
 }
@@ -520,6 +523,15 @@ struct ReadStructs {
 Result<void> decode(PngReadJob& job, const std::string& name, PngInfo* chunks_out) {
   if (job.bytes.size() < 8 || png_sig_cmp(job.bytes.data(), 0, 8) != 0)
     return make_error("png.not_png", fmt::format("cannot read PNG {}: not a PNG file (bad signature)", name));
+  job.error.limits = job.limits;
+  // The declared size first, before libpng allocates or inflates anything.
+  if (const auto h = png_header(job.bytes)) {
+    const std::int64_t w = h->width, ht = h->height;
+    if (w > job.limits.max_width || ht > job.limits.max_height || w * ht > job.limits.max_pixels)
+      return make_error("png.size", fmt::format("cannot read PNG {}: it declares {}x{} pixels, at most {}x{} and {} "
+                                                "pixels are accepted", name, w, ht, job.limits.max_width,
+                                                job.limits.max_height, job.limits.max_pixels));
+  }
   ReadStructs s;
   s.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &job.error, on_png_error, on_png_warning);
   if (!s.png) return make_error("png.corrupt", "cannot create a libpng reader");
@@ -587,10 +599,11 @@ Result<PngInfo> read_png_info_named(std::span<const std::uint8_t> bytes, const s
 }
 
 Result<OverlayImage> read_overlay_named(std::span<const std::uint8_t> bytes, const std::string& name,
-                                        bool premultiplied) {
+                                        bool premultiplied, const PngLimits& limits) {
   PngReadJob job;
   job.bytes = bytes;
   job.overlay = true;
+  job.limits = limits;
   if (auto ok = decode(job, name, nullptr); !ok) return ok.error();
   OverlayImage img;
   img.width = static_cast<int>(job.width);
@@ -617,14 +630,32 @@ Result<PngInfo> read_png_info_memory(std::span<const std::uint8_t> bytes) {
   return read_png_info_named(bytes, "<memory>");
 }
 
-Result<OverlayImage> read_overlay_png(const fs::path& path, bool premultiplied) {
-  auto bytes = slurp(path, "UI overlay PNG", "png");
-  if (!bytes) return bytes.error();
-  return read_overlay_named(*bytes, path.string(), premultiplied);
+std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes) {
+  // Signature (8), IHDR length (4) = 13, "IHDR", width, height, bit depth, colour type.
+  static const std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 26 || std::memcmp(bytes.data(), kSignature, 8) != 0 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0)
+    return std::nullopt;
+  const auto be32 = [&](std::size_t o) {
+    return (std::uint32_t(bytes[o]) << 24) | (std::uint32_t(bytes[o + 1]) << 16) | (std::uint32_t(bytes[o + 2]) << 8) |
+           std::uint32_t(bytes[o + 3]);
+  };
+  return PngHeader{be32(16), be32(20), bytes[24], bytes[25]};
 }
 
-Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied) {
-  return read_overlay_named(bytes, "<memory>", premultiplied);
+std::uint64_t overlay_decode_bytes(std::uint32_t width, std::uint32_t height) {
+  // RGBA floats (16 B) plus libpng's rows at up to 16 bits x 4 channels (8 B).
+  return std::uint64_t(width) * height * (16 + 8);
+}
+
+Result<OverlayImage> read_overlay_png(const fs::path& path, bool premultiplied, const PngLimits& limits) {
+  auto bytes = slurp(path, "UI overlay PNG", "png");
+  if (!bytes) return bytes.error();
+  return read_overlay_named(*bytes, path.string(), premultiplied, limits);
+}
+
+Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied,
+                                             const PngLimits& limits) {
+  return read_overlay_named(bytes, "<memory>", premultiplied, limits);
 }
 
 }  // namespace hdrd::io

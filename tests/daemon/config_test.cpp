@@ -82,6 +82,25 @@ TEST(Config, MistakesAreRefusedWithTheKey) {
       {"[log]\nlevel = \"loud\"\n", "log.level"},
       {"[render]\ndefault_width = 640\n", "render"},  // gone: the settings table's defaults rule
       {"[limits]\nmax_request_seconds = true\n", "limits.max_request_seconds"},
+      // Values that parse but would break everything (issue 14): every duration and size has a range.
+      {"[limits]\nmax_request_seconds = 1e300\n", "limits.max_request_seconds"},
+      {"[limits]\nmax_request_seconds = 0.0\n", "limits.max_request_seconds"},
+      {"[limits]\nmax_request_seconds = inf\n", "limits.max_request_seconds"},
+      {"[limits]\nmax_request_seconds = nan\n", "limits.max_request_seconds"},
+      {"[limits]\nmax_body_bytes = 9223372036854775807\n", "limits.max_body_bytes"},
+      {"[limits]\nmax_upload_bytes = 100\n", "limits.max_upload_bytes"},
+      {"[limits]\nmax_samples = 100000\n", "limits.max_samples"},
+      {"[server]\ndrain_timeout_s = 1e300\n", "server.drain_timeout_s"},
+      {"[server]\nconnection_timeout_s = 2000000000\n", "server.connection_timeout_s"},
+      {"[server]\nheader_timeout_s = 0.0\n", "server.header_timeout_s"},
+      {"[server]\nheader_timeout_s = 1e18\n", "server.header_timeout_s"},
+      {"[server]\nbody_grace_s = 1e300\n", "server.body_grace_s"},
+      {"[server]\nmin_body_bytes_per_s = 0\n", "server.min_body_bytes_per_s"},
+      {"[server]\nmax_connections = 0\n", "server.max_connections"},
+      {"[server]\nmax_connections = 10\nmax_connections_per_peer = 11\n", "server.max_connections_per_peer"},
+      {"[workers]\nqueue_depth = 100000000\n", "workers.queue_depth"},
+      {"[workers]\nretry_after_s = 1000000\n", "workers.retry_after_s"},
+      {"[workers]\nmemory_budget_bytes = 1000\n", "workers.memory_budget_bytes"},
   };
   for (const auto& [toml, key] : table) {
     const Error e = config_error(toml);
@@ -91,6 +110,57 @@ TEST(Config, MistakesAreRefusedWithTheKey) {
   EXPECT_NE(config_error("[limits]\nmax_width = \"big\"\n").message.find("test.toml:2"), std::string::npos)
       << "errors name file:line";
   EXPECT_EQ(config_error("[limits\n").code, "config.invalid");
+}
+
+TEST(Config, RangeErrorsNameTheRange) {
+  const Error e = config_error("[limits]\nmax_request_seconds = 1e300\n");
+  EXPECT_EQ(e.code, "config.invalid");
+  EXPECT_NE(e.message.find("outside [0.001, 86400]"), std::string::npos) << e.message;
+}
+
+TEST(Config, NewConnectionKeysAreRead) {
+  const Config c = parse_config(R"(
+[server]
+max_connections = 512
+max_connections_per_peer = 100
+header_timeout_s = 2.5
+body_grace_s = 1
+min_body_bytes_per_s = 1000
+[workers]
+memory_budget_bytes = 1073741824
+)", "t.toml");
+  const ConnectionLimits l = connection_limits(c.server);
+  EXPECT_EQ(l.max_connections, 512);
+  EXPECT_EQ(l.max_connections_per_peer, 100);
+  EXPECT_DOUBLE_EQ(l.header_timeout_s, 2.5);
+  EXPECT_DOUBLE_EQ(l.body_grace_s, 1.0);
+  EXPECT_EQ(l.min_body_bytes_per_s, 1000u);
+  EXPECT_EQ(effective_memory_budget(c.workers), 1u << 30);
+  EXPECT_GT(effective_memory_budget(WorkerConfig{}), 64u << 20) << "0 means half of the RAM";
+}
+
+// A dump directory that cannot be written is reported when the configuration is loaded.
+TEST(Config, DumpDirectoryIsCheckedWhenLoaded) {
+  testing::TempDir dir;
+  Config c;
+  c.source = "t.toml";
+  c.paths.dump_dir = dir.path() / "new" / "dumps";
+  EXPECT_NO_THROW(check_config_paths(c));
+  EXPECT_TRUE(std::filesystem::is_directory(c.paths.dump_dir)) << "created";
+  EXPECT_TRUE(std::filesystem::is_empty(c.paths.dump_dir)) << "the write test leaves nothing behind";
+  std::ofstream(dir.path() / "file") << "x";
+  c.paths.dump_dir = dir.path() / "file";
+  try {
+    check_config_paths(c);
+    ADD_FAILURE() << "a file as dump directory was accepted";
+  } catch (const HdrdError& e) {
+    EXPECT_EQ(e.error().field, "paths.dump_dir");
+  }
+  c.paths.dump_dir = "/proc/hdrd-no-such-dir/dumps";  // /proc takes no new directories, even from root
+  EXPECT_THROW(check_config_paths(c), HdrdError);
+  c.paths.dump_dir.clear();
+  c.paths.asset_root = dir.path() / "missing";
+  EXPECT_THROW(check_config_paths(c), HdrdError);
 }
 
 TEST(Config, DefaultSocketFollowsXdgRuntimeDir) {

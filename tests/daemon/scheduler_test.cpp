@@ -5,7 +5,10 @@
 
 #include <condition_variable>
 #include <future>
+#include <cmath>
+#include <limits>
 #include <mutex>
+#include <thread>
 
 #include "daemon/scheduler.hpp"
 
@@ -58,6 +61,15 @@ struct Delivery {
   }
 };
 
+SchedulerOptions options(int render_workers, int encode_threads, int queue_depth, bool coalesce) {
+  SchedulerOptions o;
+  o.render_workers = render_workers;
+  o.encode_threads = encode_threads;
+  o.queue_depth = queue_depth;
+  o.coalesce = coalesce;
+  return o;
+}
+
 JobSpec gated_job(Gate& gate, std::string key, std::string body, std::atomic<int>* runs = nullptr) {
   JobSpec s;
   s.key = std::move(key);
@@ -74,7 +86,7 @@ JobSpec gated_job(Gate& gate, std::string key, std::string body, std::atomic<int
 }
 
 TEST(Scheduler, AdmitsUpToCapacityThenRefuses) {
-  Scheduler s({/*render_workers=*/1, /*encode_threads=*/1, /*queue_depth=*/1, /*coalesce=*/false}, fake_factory());
+  Scheduler s(options(/*render_workers=*/1, /*encode_threads=*/1, /*queue_depth=*/1, /*coalesce=*/false), fake_factory());
   s.start();
   Gate gate;
   std::vector<std::unique_ptr<Delivery>> d;
@@ -93,7 +105,7 @@ TEST(Scheduler, AdmitsUpToCapacityThenRefuses) {
 }
 
 TEST(Scheduler, IdenticalKeysShareOneJob) {
-  Scheduler s({1, 1, 4, true}, fake_factory());
+  Scheduler s(options(1, 1, 4, true), fake_factory());
   s.start();
   Gate gate;
   std::atomic<int> runs{0};
@@ -114,7 +126,7 @@ TEST(Scheduler, IdenticalKeysShareOneJob) {
 }
 
 TEST(Scheduler, CancellingAQueuedJobFreesItsSlotAndItNeverRuns) {
-  Scheduler s({1, 1, 0, false}, fake_factory());  // capacity 2
+  Scheduler s(options(1, 1, 0, false), fake_factory());  // capacity 2
   s.start();
   Gate gate;
   std::atomic<int> runs{0};
@@ -135,7 +147,7 @@ TEST(Scheduler, CancellingAQueuedJobFreesItsSlotAndItNeverRuns) {
 }
 
 TEST(Scheduler, CancelDetachesOneWaiterAndStopsAnAbandonedJob) {
-  Scheduler s({1, 1, 4, true}, fake_factory());
+  Scheduler s(options(1, 1, 4, true), fake_factory());
   s.start();
   Gate gate;
   std::atomic<int> runs{0};
@@ -159,7 +171,7 @@ TEST(Scheduler, CancelDetachesOneWaiterAndStopsAnAbandonedJob) {
 }
 
 TEST(Scheduler, DrainFinishesRunningJobsAndAnswersQueuedOnes) {
-  Scheduler s({1, 1, 4, false}, fake_factory());
+  Scheduler s(options(1, 1, 4, false), fake_factory());
   s.start();
   Gate gate;
   Delivery running, queued;
@@ -181,7 +193,7 @@ TEST(Scheduler, DrainFinishesRunningJobsAndAnswersQueuedOnes) {
 }
 
 TEST(Scheduler, DrainTimeoutCancelsWhatIsLeft) {
-  Scheduler s({1, 1, 4, false}, fake_factory());
+  Scheduler s(options(1, 1, 4, false), fake_factory());
   s.start();
   Gate gate;
   Delivery running, queued;
@@ -199,7 +211,7 @@ TEST(Scheduler, DrainTimeoutCancelsWhatIsLeft) {
 }
 
 TEST(Scheduler, NoRendererMeansRenderJobsAreRefused) {
-  Scheduler s({1, 1, 4, false},
+  Scheduler s(options(1, 1, 4, false),
               [](int) -> Result<std::unique_ptr<RenderResource>> { return make_error("gl.egl", "no EGL here"); });
   s.start();
   EXPECT_FALSE(s.renderer_available());
@@ -220,7 +232,7 @@ TEST(Scheduler, NoRendererMeansRenderJobsAreRefused) {
 }
 
 TEST(Scheduler, ExpiredJobsAreAnsweredWithTimeout) {
-  Scheduler s({1, 1, 4, false}, fake_factory());
+  Scheduler s(options(1, 1, 4, false), fake_factory());
   s.start();
   JobSpec j;
   j.deadline = Clock::now() - std::chrono::seconds(1);
@@ -232,6 +244,82 @@ TEST(Scheduler, ExpiredJobsAreAnsweredWithTimeout) {
   EXPECT_EQ(r.first->status, 504u);
   EXPECT_EQ(r.first->error_code, "request.timeout");
   s.drain_and_stop(std::chrono::seconds(5));
+}
+
+// Admission weighs memory: a job alone beyond the budget is the client's fault (400
+// request.memory); one that does not fit beside the admitted ones is 503 queue.memory, and
+// fits again once they finish. Coalesced waiters add nothing.
+TEST(Scheduler, MemoryBudgetBoundsWhatIsAdmitted) {
+  auto o = options(1, 2, 8, true);
+  o.memory_budget_bytes = 100 << 20;
+  Scheduler s(o, fake_factory());
+  s.start();
+  Gate gate;
+  auto job = [&](std::string key, std::uint64_t mib) {
+    JobSpec j = gated_job(gate, std::move(key), "m");
+    j.memory_bytes = mib << 20;
+    return j;
+  };
+  Delivery too_big;
+  auto r = s.submit(job("", 101), too_big.fn(), true);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "request.memory");
+  EXPECT_EQ(http_status(r.error()), 400u);
+  EXPECT_NE(r.error().message.find("101 MiB"), std::string::npos) << r.error().message;
+
+  Delivery a, shared, b;
+  ASSERT_TRUE(s.submit(job("a", 60), a.fn(), true).ok());
+  ASSERT_TRUE(s.submit(job("a", 60), shared.fn(), true).ok()) << "an identical request joins the admitted job";
+  EXPECT_EQ(s.stats().memory_in_flight_bytes, 60u << 20);
+  auto refused = s.submit(job("b", 50), b.fn(), true);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, "queue.memory");
+  EXPECT_EQ(http_status(refused.error()), 503u);
+  gate.open();
+  EXPECT_EQ(a.future.get().first->status, 200u);
+  EXPECT_TRUE(shared.future.get().second);
+  for (int i = 0; i < 200 && s.stats().memory_in_flight_bytes != 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  EXPECT_EQ(s.stats().memory_in_flight_bytes, 0u);
+  Delivery later;
+  EXPECT_TRUE(s.submit(job("b", 50), later.fn(), true).ok());
+  EXPECT_EQ(later.future.get().first->status, 200u);
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+// A cancelled queued job gives its memory back at once.
+TEST(Scheduler, CancelledQueuedJobReleasesItsMemory) {
+  auto o = options(1, 1, 4, false);
+  o.memory_budget_bytes = 100 << 20;
+  Scheduler s(o, fake_factory());
+  s.start();
+  Gate gate;
+  Delivery running, queued;
+  JobSpec first = gated_job(gate, "", "1");
+  first.memory_bytes = 10 << 20;
+  ASSERT_TRUE(s.submit(std::move(first), running.fn(), true).ok());
+  gate.wait_arrivals(1);
+  JobSpec second = gated_job(gate, "", "2");
+  second.memory_bytes = 80 << 20;
+  auto w = s.submit(std::move(second), queued.fn(), true);
+  ASSERT_TRUE(w.ok());
+  EXPECT_EQ(s.stats().memory_in_flight_bytes, 90u << 20);
+  EXPECT_TRUE(s.cancel(*w));
+  EXPECT_EQ(s.stats().memory_in_flight_bytes, 10u << 20);
+  gate.open();
+  running.future.get();
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
+// A deadline far beyond any request saturates instead of wrapping into the past (issue 14:
+// max_request_seconds = 1e300 made every request time out while queued).
+TEST(Scheduler, DeadlinesSaturate) {
+  const auto now = Clock::now();
+  EXPECT_GT(deadline_after(now, 1e300), now + std::chrono::hours(24 * 300));
+  EXPECT_GT(deadline_after(now, std::numeric_limits<double>::infinity()), now);
+  EXPECT_EQ(deadline_after(now, std::nan("")), now);
+  EXPECT_EQ(deadline_after(now, -5), now);
+  EXPECT_EQ(deadline_after(now, 2.5) - now, std::chrono::milliseconds(2500));
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // The daemon's transport pieces: paths confined to the asset root, Accept negotiation (RFC
-// 9110 §12.5.1) over the output table, and the one error-status table — with a test that
+// 9110 §12.5.1) over the output table, the input bounds of query parameters and multipart
+// parts (issue 14), and the one error-status table — with a test that
 // collects every error code the code base can produce and fails on any without a status.
 #include <gtest/gtest.h>
 
@@ -11,8 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/accept.hpp"
+#include "daemon/input_bounds.hpp"
 #include "daemon/paths.hpp"
 #include "daemon/wire_error.hpp"
+#include "job/settings.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace hdrd::daemon {
@@ -107,7 +110,12 @@ TEST(WireError, StatusPerCode) {
       {"request.timeout", 504},      {"path.forbidden", 403},        {"path.not_found", 404},
       {"queue.full", 503},           {"server.draining", 503},       {"renderer.unavailable", 503},
       {"exr.truncated", 422},        {"tonemap.unknown", 422},       {"edid.bad_header", 422},
-      {"edid.too_short", 422},       {"io.write", 500},              {"internal", 500}};
+      {"edid.too_short", 422},       {"io.write", 500},              {"internal", 500},
+      // issue 14: the client's faults are 4xx, a full disk 507, a busy daemon 503
+      {"io.no_space", 507},          {"file.too_large", 422},        {"request.query", 400},
+      {"request.length_required", 411}, {"request.header_timeout", 408}, {"request.body_timeout", 408},
+      {"server.busy", 503},          {"queue.memory", 503},          {"request.memory", 400},
+      {"request.depth", 400}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);
@@ -116,6 +124,64 @@ TEST(WireError, StatusPerCode) {
   EXPECT_EQ(body["error"]["message"], "width: bad");
   EXPECT_EQ(body["error"]["field"], "width");
   EXPECT_FALSE(nlohmann::json::parse(error_body(make_error("x", "y")))["error"].contains("field"));
+}
+
+// ---- input bounds (issue 14) ----------------------------------------------------------
+
+// Every entry point: the multipart 'request' part is bounded like a body (issue 14: a part
+// nested 100 000 deep crashed the daemon).
+TEST(InputBounds, MultipartRequestPartIsBoundedLikeABody) {
+  Limits limits;
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  std::vector<Part> parts = {{"image", "a.exr", "image/x-exr", "EXR"}, {"request", "", "application/json", deep}};
+  auto up = split_encode_upload(parts, limits);
+  ASSERT_FALSE(up.ok());
+  EXPECT_EQ(up.error().code, "request.depth");
+  EXPECT_EQ(up.error().field, "request");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", std::string("{}\0x", 4)}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.syntax");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", R"({"display":{"peak_nits":1e999}})"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().field, "display.peak_nits");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", "[1]"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.type");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", "{}"}, {"request", "", "", "{}"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().code, "request.unknown_field") << "one request part";
+  parts = {{"imag\xff", "", "", "EXR"}};
+  auto bad = split_encode_upload(parts, limits);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_TRUE(io::is_valid_utf8(bad.error().field)) << "a field the JSON error body can carry";
+  parts = {{"request", "", "", "{}"}};
+  EXPECT_EQ(split_encode_upload(parts, limits).error().field, "image");
+  parts = {{"image", "", "", "EXR"}, {"request", "", "", R"({"display":{"mode":"hlg"}})"}};
+  auto ok = split_encode_upload(parts, limits);
+  ASSERT_TRUE(ok.ok()) << ok.error().message;
+  EXPECT_EQ(ok->exr, "EXR");
+  EXPECT_EQ(ok->options["display"]["mode"], "hlg");
+}
+
+// Query parameters arrive percent-decoded: %ff is a byte that is not UTF-8 and %00 a NUL.
+// Every parameter name, and a value for each, is refused with 400 request.query (issue 14:
+// mode=%ff answered 500 when the JSON library met the string).
+TEST(InputBounds, InvalidUtf8AndNulAreRefusedInEveryQueryParameter) {
+  for (const auto& p : job::settings()) {
+    if (p.query.empty()) continue;
+    const std::string name(p.query);
+    for (const std::string& value :
+         std::vector<std::string>{"\xff", "a\xc0\xaf" "b", std::string("hdr10\0x", 7), "\xed\xa0\x80"}) {
+      auto r = check_query({{name, value}});
+      ASSERT_FALSE(r.ok()) << name;
+      EXPECT_EQ(r.error().code, "request.query");
+      EXPECT_EQ(r.error().field, name);
+      EXPECT_EQ(http_status(r.error()), 400u);
+    }
+    EXPECT_TRUE(check_query({{name, "1000"}}).ok()) << name;
+  }
+  EXPECT_EQ(check_query({{"mo\xff" "de", "hdr10"}}).error().code, "request.query") << "names too";
+  EXPECT_TRUE(io::is_valid_utf8(check_query({{"mo\xff" "de", "x"}}).error().field));
+  std::vector<std::pair<std::string, std::string>> many(kMaxQueryParams + 1, {"mode", "hdr10"});
+  EXPECT_EQ(check_query(many).error().code, "request.query");
+  EXPECT_EQ(check_query({{"name", std::string(kMaxQueryBytes + 1, 'a')}}).error().code, "request.query");
+  EXPECT_TRUE(check_query({{"name", "caf\xc3\xa9"}}).ok()) << "UTF-8 itself is fine";
 }
 
 // Every code the code base makes — make_error("...") anywhere, the request parser's

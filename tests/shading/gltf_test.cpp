@@ -262,6 +262,30 @@ TEST(Gltf, MalformedInputGivesClearErrors) {
   EXPECT_NE(r.error().message.find("cycle"), std::string::npos) << r.error().message;
 }
 
+// Issue 14: "extras" nested 20 000 arrays deep overflowed the stack in tinygltf's
+// recursive value conversion. The text is refused, bounded, before tinygltf sees it; a
+// NUL byte (which would end nlohmann's input early) and a number beyond double's range too.
+TEST(Gltf, DeepOrBrokenJsonIsRefusedBeforeTinygltf) {
+  const auto load = [](std::string_view text) {
+    return load_gltf_memory({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}, "", SceneLoadOptions{});
+  };
+  const std::string deep = std::string(20000, '[') + std::string(20000, ']');
+  auto r = load(R"({"asset":{"version":"2.0"},"extras":)" + deep + "}");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "gltf.json_depth");
+  EXPECT_NE(r.error().message.find("extras"), std::string::npos) << r.error().message;
+  r = load(glb(R"({"asset":{"version":"2.0"},"extras":)" + deep + "}", ""));
+  ASSERT_FALSE(r.ok()) << "the JSON chunk of a GLB as well";
+  EXPECT_EQ(r.error().code, "gltf.json_depth");
+  r = load(std::string(R"({"asset":{"version":"2.0"}})") + '\0' + "{}");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "gltf.json_syntax");
+  r = load(R"({"asset":{"version":"2.0"},"nodes":[{"translation":[1e999,0,0]}]})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "gltf.json_value");
+  EXPECT_EQ(r.error().field, "nodes[0].translation[0]");
+}
+
 TEST(Gltf, MissingFilesGiveClearErrors) {
   HDRD_REQUIRE_FIXTURE(gltf, "fixtures/gltf/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.gltf");
   hdrd::testing::TempDir dir;

@@ -236,6 +236,20 @@ TEST(SceneJson, SyntaxErrorsAreReported) {
   EXPECT_FALSE(parse_scene_json_text("{\"hdrd_scene\": 1, \"ambient_nits\": NaN}").ok());
 }
 
+// Issue 14: scene_json_fuzz aborted on 5e551, the JSON library's exception escaping a
+// function that returns a Result. Now an error naming the field.
+TEST(SceneJson, NumberOverflowNamesTheField) {
+  auto s = parse_scene_json_text(R"({"hdrd_scene": 1, "lights": [{"type": "sun", "illuminance_lux": 5e551}]})");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, "scene.json_value");
+  EXPECT_EQ(s.error().field, "lights[0].illuminance_lux");
+  EXPECT_EQ(s.error().message.find("json.exception"), std::string::npos) << s.error().message;
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  s = parse_scene_json_text(R"({"hdrd_scene": 1, "x": )" + deep + "}");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, "scene.json_depth");
+}
+
 TEST(SceneJson, BuiltinsAndDefault) {
   EXPECT_EQ(default_scene_name(), "material-grid");
   for (const std::string& name : builtin_scene_names()) {

@@ -311,5 +311,15 @@ TEST(AtomicWrite, ReplacesAndNeverTruncates) {
   EXPECT_EQ(listing(tmp.path()), (std::set<std::string>{"x.bin", "dir.bin"}));
 }
 
+// The daemon removes the temporaries a killed writer left (daemon/dump_dir.cpp) by this
+// predicate: the names create_temp makes, and nothing else.
+TEST(AtomicWrite, TemporaryNamesAreRecognised) {
+  EXPECT_TRUE(is_atomic_write_temporary(".frame.png.tmp-0123456789ab"));
+  EXPECT_TRUE(is_atomic_write_temporary(".a.tmp-ffffffffffff"));
+  for (const char* other : {"frame.png", ".frame.png", ".frame.png.tmp-0123456789a", ".frame.png.tmp-0123456789abc",
+                            ".frame.png.tmp-0123456789AB", "frame.png.tmp-0123456789ab", ".tmp-0123456789ab", ""})
+    EXPECT_FALSE(is_atomic_write_temporary(other)) << other;
+}
+
 }  // namespace
 }  // namespace hdrd::io

@@ -149,5 +149,28 @@ TEST(OverlayBadInput, AbsurdSizesAreRejectedBeforeAllocating) {
   EXPECT_EQ(read_png_info_memory(with_size(100000, 1)).error().code, "png.size");
 }
 
+// Issue 14: a 21 KB PNG declaring 16384 x 8192 decoded to 4.3 GB. A caller's limits are
+// checked against the declared size (IHDR) before libpng allocates or inflates anything.
+TEST(OverlayBadInput, DeclaredSizeIsCheckedAgainstTheCallersLimits) {
+  const Bytes huge = with_size(16384, 8192);  // within image.hpp's own limits
+  const auto h = png_header(huge);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_EQ(h->width, 16384u);
+  EXPECT_EQ(h->height, 8192u);
+  const PngLimits frame{7680, 4320, 7680LL * 4320LL};
+  auto e = read_overlay_png_memory(huge, false, frame);
+  ASSERT_FALSE(e.ok());
+  EXPECT_EQ(e.error().code, "png.size");
+  EXPECT_NE(e.error().message.find("declares 16384x8192"), std::string::npos) << e.error().message;
+  e = read_overlay_png_memory(with_size(2000, 2000), false, PngLimits{4096, 4096, 1 << 20});
+  ASSERT_FALSE(e.ok()) << "each side within, the area not";
+  EXPECT_EQ(e.error().code, "png.size");
+  Spec s{2, 1, 8, 6, false, {}};
+  EXPECT_TRUE(read_overlay_png_memory(pngtest::encode(s, {0, 1, 2, 3, 4, 5, 6, 7, 8}), false, PngLimits{2, 1, 2}).ok());
+  EXPECT_FALSE(read_overlay_png_memory(pngtest::encode(s, {0, 1, 2, 3, 4, 5, 6, 7, 8}), false, PngLimits{1, 1, 1}).ok());
+  EXPECT_FALSE(png_header(Bytes{1, 2, 3}).has_value());
+  EXPECT_EQ(overlay_decode_bytes(100, 10), 100u * 10u * 24u);
+}
+
 }  // namespace
 }  // namespace hdrd::io

@@ -1,0 +1,56 @@
+// What a request will allocate, estimated before it is admitted (docs/performance-daemon.md,
+// "Memory", has the table and the measurements behind it). Limits on pixels alone do not
+// bound memory: an 8K render with 16 MSAA samples needs gigabytes, a 21 KB PNG may declare
+// 128 Mpx, an upload's EXR header says how large its float image will be. The estimate is
+// the sum of what the job holds at its peak, per stage, in bytes per pixel:
+//   render targets   20 B/px (RGBA32F colour + 32-bit depth), and 20 B/px per MSAA sample
+//   readback         16 B/px (scene light, RGBA float)
+//   decoded upload   16 B/px (the EXR as RGBA float) plus the upload's own bytes
+//   encode           16 B/px (display light when an EXR answer or dump needs it)
+//                  +  8 B/px (the encoded frame) + 6 B/px (16-bit PNG samples)
+//   reply            the serialised frame, twice (the encoder's buffer and the reply body):
+//                    PNG and raw 8 B/px, EXR 16 B/px; a dump writes the same bytes
+//   UI overlay       24 B/px of the PNG's declared size (float RGBA and libpng's rows)
+//   request text     3x the body (the text, its JSON document, a decoded base64 PNG)
+//   scene file       4x a scene_file or glTF's size (parsed, meshes, their GPU copy; its
+//                    textures are bounded by the scene loader's own limit)
+// plus a fixed 32 MiB per job (shadow map, tables, thread scratch, a first frame's JIT).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "encode/io/io.hpp"
+#include "encode/result.hpp"
+#include "job/outputs.hpp"
+#include "job/request.hpp"
+
+namespace hdrd::daemon {
+
+using job::Limits;
+
+// "1.5 GiB", "384 MiB", "12 KiB".
+std::string format_bytes(std::uint64_t bytes);
+
+// `reply`: the negotiated body format; unset: a dump (every output written to files).
+
+// A render (POST /v1/render): its frame, samples, output, scene file and UI. Errors:
+// request.limit when the UI PNG declares more pixels than the frame limits allow.
+Result<std::uint64_t> estimate_render_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
+                                             std::size_t body_bytes, const Limits& limits);
+
+// An upload (POST /v1/encode): the upload's bytes and the EXR's declared size from its
+// header. Errors: the EXR's own (exr.not_exr, exr.size, exr.truncated), request.limit for the UI.
+Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
+                                             std::span<const std::uint8_t> exr, const Limits& limits);
+
+// A test pattern (POST /v1/pattern): a display-light frame of the request's size.
+std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
+                                      std::size_t body_bytes);
+
+// The PNG limits a request's UI overlay is read under: no larger than a frame may be.
+io::PngLimits ui_png_limits(const Limits& limits);
+
+}  // namespace hdrd::daemon
