@@ -88,6 +88,7 @@ constexpr StatusEntry kStatus[] = {
     {"jxl.", 500},
     {"jpeg.", 500},
     {"dump.", 500},
+    {"paths.", 500},
     {"deflate.", 500},
     {"frame.", 500},
     {"render.", 500},

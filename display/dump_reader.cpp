@@ -88,7 +88,7 @@ Result<EncodedFrame> read_dump(const fs::path& sidecar) {
   if (!text) return text.error();
   auto parsed = io::parse_json_bounded(std::string_view(reinterpret_cast<const char*>(text->data()), text->size()),
                                        io::JsonBounds{16u << 20, 64, "sidecar", "dump.json_"});
-  if (!parsed) return bad(sidecar, "", parsed.error().message);
+  if (!parsed) return bad(sidecar, "", "not a JSON object: " + parsed.error().message);
   const json& j = *parsed;
   if (!j.is_object()) return bad(sidecar, "", "not a JSON object (is this a dump's .json sidecar?)");
   const auto mode = parse_mode(j.value("mode", ""));

@@ -147,7 +147,7 @@ TEST(DaemonAbuse, DeepGltfIsRefusedByServeAndByRender) {
   const std::string extras = std::string(20000, '[') + std::string(20000, ']');
   std::ofstream(d.assets() / "deep.gltf") << R"({"asset":{"version":"2.0"},"extras":)" << extras << "}";
   auto c = d.client();
-  auto r = request(c, "POST", "/v1/render", R"({"gltf":"deep.gltf","width":32,"height":18})",
+  auto r = request(c, "POST", "/v1/render", R"({"scene":"deep.gltf","width":32,"height":18})",
                    {{"Content-Type", "application/json"}});
   EXPECT_TRUE(d.alive());
   if (r.status == 503) GTEST_SKIP() << "no renderer here: " << r.body;

@@ -245,12 +245,12 @@ TEST(Request, NestingDepthIsRefusedWhileParsing) {
     ASSERT_FALSE(r.ok());
     EXPECT_EQ(r.error().code, "request.depth") << levels;
   }
-  auto unclosed = parse(std::string(100000, '{'));
+  auto unclosed = parse(std::string(100000, '['));
   ASSERT_FALSE(unclosed.ok());
   EXPECT_EQ(unclosed.error().code, "request.depth") << "refused before the text ends";
   auto ctx = context();
   ctx.limits.max_json_depth = 4;
-  auto in_string = parse_request(R"({"name":"[[[[{{{{[[[[","dump":true})", ctx);
+  auto in_string = parse_request(R"({"grade":{"ocio_look":"[[[[{{{{[[[["}})", ctx);
   EXPECT_TRUE(in_string.ok()) << in_string.error().message;
   EXPECT_EQ(parse_request(R"({"display":{"x":[[[1]]]}})", ctx).error().code, "request.depth") << "5 levels, 4 allowed";
 }
