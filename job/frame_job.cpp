@@ -120,14 +120,33 @@ struct FrameJob::State {
   bool stopped() const { return options.should_stop && options.should_stop(); }
 };
 
+namespace {
+
+// Every output must have a form for the request's source and the resolved mode.
+Result<void> check_outputs(const std::vector<Output>& outputs, Source source, Mode mode) {
+  for (Output o : outputs)
+    if (!applies(output_info(o), source, mode))
+      return make_error("request.value", fmt::format("formats: {} has no {} form", to_string(mode), output_info(o).name),
+                        "formats");
+  return {};
+}
+
+// The encoder settings of the request, keeping what the asked-for outputs need.
+Result<EncodeSettings> job_settings(FrameJob::State& st) {
+  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings);
+  if (!settings) return settings.error();
+  settings->keep_display_nits = st.wants(&OutputInfo::needs_display_nits);
+  settings->png_samples = st.wants(&OutputInfo::needs_signal16);
+  return settings;
+}
+
+}  // namespace
+
 FrameJob::FrameJob(std::unique_ptr<State> s) : s_(std::move(s)) {}
 FrameJob::~FrameJob() = default;
 
 Result<void> FrameJob::set_outputs(std::vector<Output> outputs) {
-  for (Output o : outputs)
-    if (!applies(output_info(o), s_->request.source, s_->target.mode))
-      return make_error("request.value",
-                        fmt::format("formats: {} has no {} form", to_string(s_->target.mode), output_info(o).name), "formats");
+  if (auto ok = check_outputs(outputs, s_->request.source, s_->target.mode); !ok) return ok.error();
   s_->outputs = std::move(outputs);
   return {};
 }
@@ -159,10 +178,7 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
     if (!named) return named.error();
     outputs = std::move(*named);
   }
-  for (Output o : *outputs)
-    if (!applies(output_info(o), request.source, target->mode))
-      return make_error("request.value",
-                        fmt::format("formats: {} has no {} form", to_string(target->mode), output_info(o).name), "formats");
+  if (auto ok = check_outputs(*outputs, request.source, target->mode); !ok) return ok.error();
   if (request.source == Source::encode && input.path.empty() && input.bytes.empty())
     return make_error("request.value", "an encode request needs an EXR", "image");
   if (request.source == Source::pattern)
@@ -183,10 +199,8 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
 Result<void> FrameJob::render(shading::Renderer& renderer) {
   State& st = *s_;
   if (!needs_renderer()) return {};
-  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings);
+  auto settings = job_settings(st);
   if (!settings) return settings.error();
-  settings->keep_display_nits = st.wants(&OutputInfo::needs_display_nits);
-  settings->png_samples = st.wants(&OutputInfo::needs_signal16);
   if (st.stopped()) return cancelled();
 
   // Exposure is always metered on the renderer's 8x8 block means (RTR4 §8.2.2 meters a
@@ -318,11 +332,8 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   in.white_luminance_nits = st.exr->white_luminance.value_or(1.0);
   if (in.units == InputUnits::absolute && !st.exr->white_luminance)
     st.warnings.push_back("input absolute without whiteLuminance: values are taken as cd/m2");
-  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings);
+  auto settings = job_settings(st);  // exposure mode: the rule of encode_settings (job/build.cpp)
   if (!settings) return settings.error();
-  settings->keep_display_nits = st.wants(&OutputInfo::needs_display_nits);
-  settings->png_samples = st.wants(&OutputInfo::needs_signal16);
-  settings->exposure.mode = exposure_mode(st.request, st.request.optional_number("exposure.illuminance_lux").has_value());
   const auto t1 = Clock::now();
   auto prepared = prepare_pipeline(in, *settings);
   if (!prepared) return prepared.error();
