@@ -389,8 +389,9 @@ Vec3 input_pixel(const SceneInput& in, std::size_t i) {
   return {detail::half_to_float(p[0]), detail::half_to_float(p[1]), detail::half_to_float(p[2])};
 }
 
-// Scene luminance in cd/m2 of (a subsample of) the input, for the auto-exposure modes.
-std::vector<float> metering_samples(const SceneInput& in, double unit_nits) {
+}  // namespace
+
+std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits) {
   const std::size_t n = in.image ? in.image->pixel_count() : in.half->pixel_count();
   const std::size_t step = std::max<std::size_t>(1, n / (1u << 21));  // at most ~2 Mpx
   const Vec3 luma{color::kRec2020Luma.x * in.to_working.m[0][0] + color::kRec2020Luma.y * in.to_working.m[1][0] +
@@ -408,7 +409,33 @@ std::vector<float> metering_samples(const SceneInput& in, double unit_nits) {
   return out;
 }
 
-}  // namespace
+std::string_view source_peak_param(const tonemap::ToneCurveInfo& curve) {
+  for (std::string_view name : {"source_peak_nits", "hdr_max", "scene_max"})
+    for (const auto& p : curve.params)
+      if (p.name == name) return name;
+  return {};
+}
+
+void set_exposure_scale(PreparedPipeline& p, double scale) {
+  p.metering.scale = scale;
+  p.scene_scale = p.unit_nits * scale;
+}
+
+Result<void> set_source_peak(PreparedPipeline& p, double peak_relative) {
+  if (!p.curve_info) return make_error("internal", "set_source_peak on a pipeline that is not prepared");
+  const std::string_view name = source_peak_param(*p.curve_info);
+  if (name.empty()) return {};
+  if (!std::isfinite(peak_relative) || peak_relative <= 0)
+    return make_error("tonemap.peak", fmt::format("source peak {} is not a positive number", peak_relative));
+  const auto& t = p.settings.target;
+  double value = name == "source_peak_nits" ? peak_relative * t.paper_white_nits : peak_relative;
+  for (const auto& spec : p.curve_info->params)
+    if (spec.name == name) value = std::clamp(value, spec.min, spec.max);
+  p.params[std::string(name)] = value;
+  const tonemap::Display display{t.peak_nits, t.black_nits, t.paper_white_nits};
+  p.curve = p.curve_info->prepare(display, p.params);
+  return {};
+}
 
 Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSettings& s) {
   if (auto ok = validate(s.target); !ok) return ok.error();
@@ -448,12 +475,13 @@ Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSett
   if (!ex.illuminance_lux && in.illuminance_lux && *in.illuminance_lux > 0) ex.illuminance_lux = in.illuminance_lux;
   std::vector<float> samples;
   if (ex.mode == exposure::Mode::log_average || ex.mode == exposure::Mode::histogram)
-    samples = metering_samples(in, unit_nits);
+    samples = scene_luminance_nits(in, unit_nits);
   auto m = exposure::meter(ex, samples, t.paper_white_nits);
   if (!m) return m.error();
   p.metering = *m;
   p.settings.exposure = ex;
   p.input_to_working = in.to_working;
+  p.unit_nits = unit_nits;
   p.scene_scale = unit_nits * m->scale;
   return p;
 }

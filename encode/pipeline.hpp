@@ -81,11 +81,26 @@ struct PreparedPipeline {
   exposure::Metering metering;
   color::Mat3 input_to_working;            // includes nothing but primaries
   double scene_scale = 1.0;                // input value -> relative (exposure, units, compensation)
+  double unit_nits = 1.0;                  // cd/m2 of input value 1.0 (absolute: white luminance; relative: paper white)
   nlohmann::json describe() const;         // settings for the sidecar
 };
 
 // Validates settings and meters exposure on the input (auto modes read the image).
 Result<PreparedPipeline> prepare_pipeline(const SceneInput& input, const EncodeSettings& settings);
+
+// Scene luminance in cd/m2 of (a subsample of, at most ~2 Mpx) the input: what the
+// auto-exposure modes meter and a sequence's temporal decisions read (encode/tone/temporal.hpp).
+std::vector<float> scene_luminance_nits(const SceneInput& input, double unit_nits);
+
+// A sequence's decisions for one frame, applied to its prepared pipeline: the exposure
+// scale (cd/m2 -> relative, what exposure::meter returns; the sidecar's exposure.scale) and
+// a source peak for curves that take one (relative, 1.0 = diffuse white). The curve's
+// source-peak parameter (bt2390 source_peak_nits, lottes-hdr hdr_max, drago scene_max) is
+// set, clamped to its range, and the curve prepared again; curves without one are unchanged.
+void set_exposure_scale(PreparedPipeline& p, double scale);
+Result<void> set_source_peak(PreparedPipeline& p, double peak_relative);
+// The name of the curve's source-peak parameter, empty when it has none.
+std::string_view source_peak_param(const tonemap::ToneCurveInfo& curve);
 
 // Reference path for one pixel: input RGB (as stored) -> display nits in the container
 // primaries after tone mapping, grading and gamut mapping (no UI). Double precision.

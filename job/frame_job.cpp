@@ -243,6 +243,8 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
   settings->exposure.mode = exposure_mode(st.request, r->dominant_illuminance_lux > 0);
   auto prepared = prepare_pipeline(meter, *settings);
   if (!prepared) return prepared.error();
+  if (st.options.temporal)
+    if (auto ok = st.options.temporal(meter, *prepared); !ok) return ok.error();
   st.settings = std::move(*settings);
   if (st.stopped()) return cancelled();
 
@@ -337,6 +339,8 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   const auto t1 = Clock::now();
   auto prepared = prepare_pipeline(in, *settings);
   if (!prepared) return prepared.error();
+  if (st.options.temporal)
+    if (auto ok = st.options.temporal(in, *prepared); !ok) return ok.error();
   auto f = encode_prepared(in, *prepared);
   if (!f) return f.error();
   st.timings["encode"] = ms_since(t1);

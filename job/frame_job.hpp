@@ -21,6 +21,7 @@
 
 #include "encode/frame.hpp"
 #include "encode/image.hpp"
+#include "encode/pipeline.hpp"
 #include "encode/result.hpp"
 #include "job/outputs.hpp"
 #include "job/request.hpp"
@@ -40,6 +41,11 @@ struct JobOptions {
   bool scene_files = true;
   int max_lights = 256;
   std::function<bool()> should_stop;        // cancellation (the daemon's deadline, a disconnect)
+  // Sequences (job/sequence.cpp): the scene time of a render, and the per-frame decisions
+  // taken once the frame is metered and its pipeline prepared, before it is encoded (the
+  // exposure scale, the source peak: encode/pipeline.hpp set_exposure_scale/set_source_peak).
+  double time_s = 0;
+  std::function<Result<void>(const SceneInput& metered, PreparedPipeline& prepared)> temporal;
 };
 
 // The EXR of an encode request: a file (CLI) or the uploaded bytes (daemon).

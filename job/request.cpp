@@ -87,6 +87,9 @@ class Parser {
     if (s.reach == Reach::cli && ctx_.reach == Reach::daemon)
       fail("request.unknown_field", fmt::format("{}: set by the daemon's configuration, not per request", shown(path)),
            path);
+    if (s.sequence && !ctx_.sequence)
+      fail("request.unknown_field",
+           fmt::format("{}: a sequence setting (hdrd render/encode --frames, POST /v1/sequences)", shown(path)), path);
     if (s.reach == Reach::daemon && ctx_.reach == Reach::cli)
       fail("request.unknown_field", fmt::format("{}: only the daemon takes it", shown(path)), path);
     json value = check(s, path, v);
@@ -437,6 +440,7 @@ class Rules {
 void fill_defaults(FrameRequest& r, const ParseContext& ctx) {
   for (const auto& s : settings()) {
     if (!s.takes(r.source) || r.values.count(s.path)) continue;
+    if (s.sequence && !ctx.sequence) continue;
     if (s.reach == Reach::cli && ctx.reach == Reach::daemon) continue;
     if (s.reach == Reach::daemon && ctx.reach == Reach::cli) continue;
     nlohmann::json v = s.default_value();
@@ -520,6 +524,7 @@ Result<FrameRequest> parse_request_json(const nlohmann::json& body, const ParseC
       return make_error("request.type", fmt::format("request: expected a JSON object, got {}", type_name(body)), "");
     FrameRequest r;
     r.source = ctx.source;
+    r.sequence = ctx.sequence;
     Parser(ctx, r).walk(normalise(body), "");
     fill_defaults(r, ctx);
     Rules(ctx, r).check();

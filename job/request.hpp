@@ -52,6 +52,7 @@ struct ParseContext {
   Reach reach = Reach::everywhere;  // Reach::daemon or Reach::cli: which transport-only settings exist
   Limits limits;
   PathResolver resolve_path;        // unset: paths are refused
+  bool sequence = false;            // a sequence request: the settings marked `sequence` exist
 };
 
 // A render's scene: a built-in name, a file (resolved), or an inline JSON scene.
@@ -65,6 +66,7 @@ struct SceneRef {
 
 struct FrameRequest {
   Source source = Source::render;
+  bool sequence = false;                      // parsed as a sequence (job/sequence.hpp)
   // Every setting of the source by path, validated; static defaults filled in; settings
   // with a run-time default (default_doc) are null unless given. Paths are resolved.
   std::map<std::string, nlohmann::json, std::less<>> values;

@@ -28,6 +28,10 @@ constexpr std::string_view kInputUnits[] = {"relative", "absolute"};
 constexpr std::string_view kAvifMatrix[] = {"rgb", "ycbcr"};
 constexpr std::string_view kChroma[] = {"444", "422", "420"};
 constexpr std::string_view kGainMapChannels[] = {"rgb", "luminance"};
+constexpr std::string_view kCodecs[] = {"hevc", "av1", "h264"};
+constexpr std::string_view kContainers[] = {"mp4", "mkv"};
+constexpr std::string_view kAv1Encoders[] = {"libsvtav1", "libaom-av1"};
+constexpr std::string_view kGranularity[] = {"scene", "frame"};
 constexpr std::string_view kBackends[] = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
 
 // The table. Order is the order of --help, docs/settings.md and capabilities.
@@ -137,6 +141,41 @@ std::vector<Setting> make_table() {
       {.path = "exposure.illuminance_lux", .type = T::number, .sources = kSceneReferred,
        .doc = "Light mode: the dominant illuminance", .unit = "lux", .min = 1e-6, .max = 1e7,
        .default_doc = "a render's dominant light", .flag = "--illuminance", .metavar = "LUX", .query = "illuminance_lux"},
+
+      // ---- the time axis (sequences only: docs/sequences.md; RTR4 §8.2.2) ----
+      {.path = "exposure.adaptation_time_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: time constant of exposure adaptation in stops, both directions (0: every frame from its "
+              "own metering; manual exposure never adapts)",
+       .unit = "s", .min = 0, .max = 1000, .default_json = "1", .flag = "--adaptation", .metavar = "S",
+       .sequence = true},
+      {.path = "exposure.adaptation_brighten_time_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: adaptation time constant while the exposure rises (into the dark)", .unit = "s", .min = 0,
+       .max = 1000, .default_doc = "exposure.adaptation_time_s", .flag = "--adaptation-brighten", .metavar = "S",
+       .sequence = true},
+      {.path = "exposure.adaptation_darken_time_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: adaptation time constant while the exposure falls (into the light)", .unit = "s", .min = 0,
+       .max = 1000, .default_doc = "exposure.adaptation_time_s", .flag = "--adaptation-darken", .metavar = "S",
+       .sequence = true},
+      {.path = "tone.dynamic_peak", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Sequences: a curve that takes a source peak (bt2390's source_peak_nits) follows the frames' smoothed "
+              "peak, unless tone.params sets it",
+       .default_json = "true", .flag = "--no-dynamic-peak", .sequence = true},
+      {.path = "tone.peak_percentile", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: the luminance percentile taken as a frame's peak", .unit = "%", .min = 50, .max = 100,
+       .default_json = "99.99", .flag = "--peak-percentile", .metavar = "P", .sequence = true},
+      {.path = "tone.peak_rise_time_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: time constant (stops) while the detected peak rises", .unit = "s", .min = 0, .max = 1000,
+       .default_json = "0.25", .flag = "--peak-rise", .metavar = "S", .sequence = true},
+      {.path = "tone.peak_fall_time_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: time constant (stops) while the detected peak falls", .unit = "s", .min = 0, .max = 1000,
+       .default_json = "1", .flag = "--peak-fall", .metavar = "S", .sequence = true},
+      {.path = "sequence.detect_cuts", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Sequences: detect scene cuts (a cut resets adaptation and the peak, starts a metadata scene and a "
+              "keyframe)",
+       .default_json = "true", .flag = "--no-detect-cuts", .sequence = true},
+      {.path = "sequence.cut_threshold_stops", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: histogram distance between consecutive frames that makes a cut", .unit = "stops",
+       .min = 0.05, .max = 30, .default_json = "2", .flag = "--cut-threshold", .metavar = "STOPS", .sequence = true},
 
       // ---- UI overlay (REFERENCE.md §1.6) ----
       {.path = "ui.path", .type = T::path, .sources = kSceneReferred,
@@ -317,6 +356,59 @@ std::vector<Setting> make_table() {
        .doc = "Offset added to the HDR light before the ratio (ISO 21496-1 alternate offset, hdrgm:OffsetHDR)",
        .min = 0, .max = 1, .default_json = "0.015625", .flag = "--gainmap-offset-hdr", .metavar = "K",
        .query = "gainmap_offset_hdr"},
+      // ---- sequences: frames, time, video (docs/sequences.md, docs/video.md) ----
+      {.path = "frames", .type = T::integer, .sources = kSceneReferred,
+       .doc = "Sequences: number of frames", .min = 1, .max = 1000000,
+       .default_doc = "a render: the scene's animation (duration x fps + 1 frames), else 1; an encode: every input",
+       .flag = "--frames", .metavar = "N", .size_limit = true, .sequence = true},
+      {.path = "fps", .type = T::number, .sources = kSceneReferred, .doc = "Sequences: frame rate",
+       .unit = "1/s", .min = 0.01, .max = 1000, .default_json = "24", .flag = "--fps", .metavar = "F",
+       .sequence = true},
+      {.path = "start_s", .type = T::number, .sources = kRender,
+       .doc = "Sequences: scene time of the first frame", .unit = "s", .min = -1e6, .max = 1e6, .default_json = "0",
+       .flag = "--start-s", .metavar = "T", .sequence = true},
+      {.path = "images", .type = T::path, .sources = kEncode,
+       .doc = "Sequences: the EXR frames, a printf pattern (shot.%04d.exr), a directory of .exr files or a list "
+              "file (one path per line); the CLI takes it as its input",
+       .default_doc = "none", .max_length = 4096, .sequence = true},
+      {.path = "video.codec", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Sequences: write OUTBASE.mp4 (or .mkv) with HEVC Main 10, AV1 10-bit or H.264 (SDR only)",
+       .choices = kCodecs, .default_doc = "none (per-frame dumps only)", .flag = "--video", .metavar = "CODEC",
+       .sequence = true},
+      {.path = "video.container", .type = T::choice, .sources = kSceneReferred, .doc = "Sequences: video container",
+       .choices = kContainers, .default_json = "\"mp4\"", .flag = "--container", .metavar = "C", .sequence = true},
+      {.path = "video.crf", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: constant rate factor (lower: better, larger)", .min = 0, .max = 63,
+       .default_doc = "hevc 22, av1 30, h264 20", .flag = "--crf", .metavar = "Q", .sequence = true},
+      {.path = "video.preset", .type = T::text, .sources = kSceneReferred,
+       .doc = "Sequences: encoder preset: x265/x264 ultrafast..placebo, SVT-AV1 0..13, libaom cpu-used 0..8",
+       .default_doc = "x265/x264 medium, SVT-AV1 its own default (10), libaom 6", .flag = "--preset",
+       .metavar = "P", .max_length = 16, .sequence = true},
+      {.path = "video.lossless", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Sequences: lossless video (x265 lossless, libaom lossless, x264 qp 0): the Y'CbCr codes exactly",
+       .default_json = "false", .flag = "--video-lossless", .sequence = true},
+      {.path = "video.range", .type = T::choice, .sources = kSceneReferred, .doc = "Sequences: Y'CbCr code range",
+       .choices = kRanges, .default_json = "\"narrow\"", .flag = "--video-range", .metavar = "RANGE",
+       .sequence = true},
+      {.path = "video.keyframe_interval_s", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: longest closed GOP (every scene cut is a keyframe too)", .unit = "s", .min = 0.01,
+       .max = 600, .default_json = "2", .flag = "--keyframe-interval", .metavar = "S", .sequence = true},
+      {.path = "video.threads", .type = T::integer, .sources = kSceneReferred,
+       .doc = "Sequences: encoder frame threads (fixed, so the bytes do not depend on the machine)", .min = 1,
+       .max = 64, .default_json = "4", .flag = "--video-threads", .metavar = "N", .sequence = true},
+      {.path = "video.av1_encoder", .type = T::choice, .sources = kSceneReferred, .doc = "Sequences: AV1 encoder",
+       .choices = kAv1Encoders, .default_doc = "libsvtav1 (libaom-av1 when lossless)", .flag = "--av1-encoder",
+       .metavar = "E", .sequence = true},
+      {.path = "video.dynamic_metadata", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Sequences: embed HDR10+ (ST 2094-40) per frame in hdr10 video", .default_json = "true",
+       .flag = "--no-dynamic-metadata", .sequence = true},
+      {.path = "metadata.granularity", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Sequences: HDR10+ and Dolby Vision L1 values per scene or per frame", .choices = kGranularity,
+       .default_json = "\"scene\"", .flag = "--metadata-granularity", .metavar = "G", .sequence = true},
+      {.path = "metadata.hdr10plus_target_nits", .type = T::number, .sources = kSceneReferred,
+       .doc = "Sequences: HDR10+ profile B, a Bezier tone curve per scene for a display of this peak",
+       .unit = "cd/m2", .min = 100, .max = 10000, .default_doc = "none (profile A)", .flag = "--hdr10plus-target",
+       .metavar = "NITS", .sequence = true},
       {.path = "png_level", .type = T::integer, .sources = kAllSources,
        .doc = "PNG deflate level: 0 stored, 1-3 fast, 4-9 smaller and much slower (docs/dump-format.md)", .min = 0,
        .max = 9, .default_json = "1", .flag = "--png-level", .metavar = "N", .query = "png_level"},
@@ -537,6 +629,7 @@ std::string settings_markdown() {
     std::string where = sources_text(s.sources);
     if (s.reach == Reach::daemon) where += " (daemon)";
     if (s.reach == Reach::cli) where += " (CLI)";
+    if (s.sequence) where += " (sequences)";
     md += fmt::format("| `{}`{} | {} | {} | {} | {} | {} | {} | {} | {} |\n", s.path,
                       s.alias.empty() ? "" : fmt::format(" (or `{}`)", s.alias),
                       s.flag.empty() ? "" : fmt::format("`{}`", s.flag), s.query.empty() ? "" : fmt::format("`{}`", s.query),
@@ -553,6 +646,7 @@ nlohmann::json settings_json() {
     json j = {{"path", s.path}, {"type", to_string(s.type)}, {"doc", s.doc}, {"applies_to", json::array()}};
     for (Source src : {Source::render, Source::encode, Source::pattern})
       if (s.takes(src)) j["applies_to"].push_back(to_string(src));
+    if (s.sequence) j["sequence"] = true;
     if (!s.unit.empty()) j["unit"] = s.unit;
     if (s.type == Type::number || s.type == Type::integer) j["min"] = s.min, j["max"] = s.max;
     if (!s.choices.empty()) j["choices"] = std::vector<std::string>(s.choices.begin(), s.choices.end());

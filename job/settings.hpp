@@ -63,6 +63,9 @@ struct Setting {
   Reach reach = Reach::everywhere;
   std::size_t max_length = 256;                 // text, path
   bool size_limit = false;                      // above max is request.limit (a size), not request.value
+  // Only a sequence request takes it (hdrd render/encode with --frames, a frame pattern or
+  // --video; POST /v1/sequences): the time axis of docs/sequences.md.
+  bool sequence = false;
 
   nlohmann::json default_value() const;         // parsed default_json
   std::string default_text() const;             // "1000", "the mode's (...)", for docs

@@ -13,7 +13,7 @@ Result<FrameDecision> TemporalTone::next(std::span<const float> luminance_nits, 
   FrameDecision d;
   const LuminanceHistogram histogram = LuminanceHistogram::of(luminance_nits);
   const bool detected = cuts_.next(histogram);
-  d.cut_distance_stops = cuts_.last_distance();
+  d.cut_distance_stops = first_ ? 0.0 : cuts_.last_distance();  // nothing before the first frame
   d.scene_start = first_ || given_cut || (settings_.detect_cuts && detected);
   first_ = false;
   auto metering = exposure::meter(exposure, luminance_nits, paper_white_nits);

@@ -55,7 +55,8 @@ struct Inputs {
 std::vector<std::string> job_settings(Source source) {
   std::vector<std::string> out;
   for (const auto& s : settings())
-    if (s.takes(source) && s.reach == Reach::everywhere && s.type != Type::scene && s.type != Type::base64)
+    if (s.takes(source) && !s.sequence && s.reach == Reach::everywhere && s.type != Type::scene &&
+        s.type != Type::base64)
       out.emplace_back(s.path);
   return out;
 }

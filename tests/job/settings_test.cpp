@@ -76,11 +76,14 @@ TEST(Settings, EachEntryIsComplete) {
 // that refine an anchor — ui.* a UI PNG, grade.* a LUT, params.* a pattern's own — are
 // refused without it by rule, so they are left out here and tested with their anchors.)
 TEST(Settings, DefaultsPassTheirOwnRulesAndMeanNothingSaid) {
-  for (Source source : {Source::render, Source::encode, Source::pattern}) {
-    SCOPED_TRACE(std::string(to_string(source)));
+  for (Source source : {Source::render, Source::encode, Source::pattern})
+  for (bool sequence : {false, true}) {
+    if (sequence && source == Source::pattern) continue;
+    SCOPED_TRACE(std::string(to_string(source)) + (sequence ? " sequence" : ""));
     nlohmann::json explicit_defaults = nlohmann::json::object();
     for (const auto& s : settings()) {
       if (!s.takes(source) || s.reach == Reach::cli || s.default_value().is_null()) continue;
+      if (s.sequence && !sequence) continue;
       if (s.path.starts_with("ui.") || s.path.starts_with("grade.") || s.path.starts_with("params.")) continue;
       std::string p(s.path);
       std::replace(p.begin(), p.end(), '.', '/');
@@ -89,6 +92,7 @@ TEST(Settings, DefaultsPassTheirOwnRulesAndMeanNothingSaid) {
     ParseContext ctx;
     ctx.source = source;
     ctx.reach = Reach::daemon;
+    ctx.sequence = sequence;
     nlohmann::json silent = nlohmann::json::object();
     if (source == Source::pattern) silent["pattern"] = explicit_defaults["pattern"] = "pq-ramp";
     auto a = parse_request_json(explicit_defaults, ctx);

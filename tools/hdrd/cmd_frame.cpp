@@ -8,8 +8,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "encode/video/writer.hpp"
 #include "job/frame_job.hpp"
+#include "job/sequence.hpp"
 #include "patterns/patterns.hpp"
+#include "tools/common/progress_bar.hpp"
 #include "tools/common/settings_cli.hpp"
 #include "tools/hdrd/command.hpp"
 
@@ -86,6 +89,38 @@ void report_progress(const job::FrameResult& r) {
   progress("made {} output{} in {:.0f} ms", r.files.size(), r.files.size() == 1 ? "" : "s", ms("outputs"));
 }
 
+std::string sequence_summary(const job::SequenceResult& r, bool json) {
+  if (json) return r.sidecar.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+  const auto& j = r.sidecar;
+  std::string s = fmt::format("{} {}x{}: {} frames at {:g} fps, {} scene{}", j.value("mode", ""), j.value("width", 0),
+                              j.value("height", 0), r.frames, j.value("fps", 0.0), j["scenes"].size(),
+                              j["scenes"].size() == 1 ? "" : "s");
+  if (j.contains("content_light_level") && j["content_light_level"].value("max_cll_nits", 0.0) > 0)
+    s += fmt::format(", MaxCLL {:.0f}, MaxFALL {:.0f}", j["content_light_level"].value("max_cll_nits", 0.0),
+                     j["content_light_level"].value("max_fall_nits", 0.0));
+  s += "\n";
+  for (const auto& [kind, path] : r.files) s += fmt::format("  {:12} {}\n", kind, path);
+  for (const auto& w : r.warnings) s += "  note: " + w + "\n";
+  return s;
+}
+
+// hdrd render --frames N / hdrd encode 'shot.%04d.exr': the sequence job (job/sequence.hpp).
+void run_sequence(const FrameCommand& o, job::FrameRequest request) {
+  video::quiet_codec_logs();
+  job::SequenceOptions options;
+  options.job.threads = static_cast<int>(request.integer("threads"));
+  ProgressBar bar("hdrd:", progress_enabled());
+  options.progress = [&bar](const job::SequenceProgress& p) { bar.update(p.frames_done, p.frames_total, p.fps, p.eta_s); };
+  auto result = job::run_sequence(request, o.outbase, options);
+  bar.finish();
+  if (!result) throw HdrdError(result.error());
+  const auto& t = result->timings_ms;
+  auto ms = [&](const char* k) { return t.contains(k) ? t[k].get<double>() / std::max(1, result->frames) : 0.0; };
+  progress("per frame: render {:.1f} ms, encode {:.1f} ms, dumps {:.1f} ms, video {:.1f} ms", ms("render"), ms("encode"),
+           ms("dumps"), ms("video"));
+  print_out(sequence_summary(*result, o.common.json));
+}
+
 void run(const FrameCommand& o) {
   set_progress_enabled(!o.common.quiet);
   if (o.source == job::Source::pattern && o.list) return print_pattern_list(o.common.json);
@@ -95,8 +130,13 @@ void run(const FrameCommand& o) {
   auto doc = request_json(o.args);
   if (!doc) throw HdrdError(doc.error());
   if (o.source == job::Source::pattern) (*doc)["pattern"] = o.pattern;
-  const auto ctx = cli_context(o.source);
+  auto ctx = cli_context(o.source);
+  // A sequence: any sequence setting given, or an encode input that only a sequence can be.
+  ctx.sequence = o.source != job::Source::pattern &&
+                 (job::sets_sequence_settings(*doc) || (o.source == job::Source::encode && job::names_a_sequence(o.input)));
+  if (ctx.sequence && o.source == job::Source::encode) (*doc)["images"] = o.input;
   auto request = job::parse_request_json(*doc, ctx);
+  if (request && ctx.sequence) return run_sequence(o, std::move(*request));
   if (!request) throw HdrdError(request.error());
   job::JobOptions options;
   options.threads = static_cast<int>(request->integer("threads"));
@@ -131,9 +171,12 @@ constexpr Spec kRender{
     "  hdrd render --scene hdr -o out/hdr-sdr --mode sdr --tonemap aces-narkowicz --format png\n"
     "  hdrd render --scene model.glb -o out/model --width 1280 --height 720 --camera 0,1.5,4:0,0.5,0:40\n"
     "  hdrd render --scene furnace -o out/f --exposure-mode light --backend osmesa --json\n"
+    "  hdrd render --scene hdr --frames 144 --fps 24 --video hevc -o out/walk   (out/walk.mp4 + sidecar)\n"
     "Writes OUTBASE.png/.exr/.raw, OUTBASE.scene.exr (float32 linear Rec.709, absolute cd/m2) and the\n"
-    "sidecar OUTBASE.json. Every option is a request setting (docs/settings.md): POST /v1/render takes the\n"
-    "same ones with the same defaults. Scenes: docs/scene-format.md; shading: docs/rendering.md."};
+    "sidecar OUTBASE.json. With --frames (or any sequence option) it renders a sequence: per-frame dumps\n"
+    "OUTBASE.NNNNN.EXT, a video with --video, and the sequence sidecar OUTBASE.json (docs/sequences.md).\n"
+    "Every option is a request setting (docs/settings.md): POST /v1/render (sequences: POST /v1/sequences)\n"
+    "takes the same ones with the same defaults. Scenes: docs/scene-format.md; shading: docs/rendering.md."};
 constexpr Spec kEncode{
     "encode", 20, job::Source::encode, "Encode a scene-referred OpenEXR image for a display mode",
     "Examples:\n"
@@ -142,6 +185,7 @@ constexpr Spec kEncode{
     "  hdrd encode Desk.exr -o out/desk-sdr --mode sdr --tonemap aces-narkowicz --exposure -1\n"
     "  hdrd encode frame.exr -o out/f --mode hdr10 --tonemap clip --format png --json\n"
     "  hdrd encode Desk.exr -o out/d --mode hlg --exposure-mode histogram --ui hud.png --ui-pos 16,16\n"
+    "  hdrd encode 'shot.%04d.exr' --video hevc --fps 24 -o out/shot   (or a directory, or a list.txt)\n"
     "Every dump gets OUTBASE.json describing exactly what is in it (docs/dump-format.md). Every option is a\n"
     "request setting (docs/settings.md): POST /v1/encode takes the same ones with the same defaults."};
 constexpr Spec kPattern{
@@ -160,7 +204,9 @@ void setup(CLI::App& root, const Spec& spec) {
   o->source = spec.source;
   auto* app = root.add_subcommand(spec.name, spec.description);
   if (spec.source == job::Source::encode)
-    app->add_option("input", o->input, "Input OpenEXR (relative: 1.0 = diffuse white; absolute with whiteLuminance)")
+    app->add_option("input", o->input,
+                    "Input OpenEXR (relative: 1.0 = diffuse white; absolute with whiteLuminance); a sequence: a "
+                    "frame pattern (shot.%04d.exr), a directory of .exr files or a list file (.txt)")
         ->required();
   if (spec.source == job::Source::pattern) {
     app->add_option("name", o->pattern, "Pattern: bt2111, pq-ramp, window, near-black, clipping, sdr-grey");

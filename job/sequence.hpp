@@ -1,0 +1,75 @@
+// A sequence: the frame job (job/frame_job.hpp) run once per frame along a time axis, with
+// the decisions that need the frames before it (encode/tone/temporal.hpp: scene cuts,
+// exposure adaptation, dynamic source peak), the metadata measured from all of them
+// (encode/video/sequence_metadata.hpp: MaxCLL/MaxFALL, HDR10+, Dolby Vision L1), and
+// the sequence's outputs: a video file (encode/video/writer.hpp), per-frame dumps
+// OUTBASE.NNNNN.EXT with their sidecars, OUTBASE.hdr10plus.json, OUTBASE.dovi.json and the
+// sequence sidecar OUTBASE.json (docs/sequences.md). hdrd render/encode with --frames or
+// a frame pattern, POST /v1/sequences and hdrctl sequence all run this.
+//
+// Frames stream: the job renders and encodes frame n on the caller's thread (the GL
+// context's) while a writer thread writes frame n-1's dumps and feeds the video encoder;
+// between them a bounded queue (SequenceOptions::queue_depth frames), so resident memory
+// does not grow with the number of frames. An error, or cancellation, removes every file
+// the sequence wrote: a sequence is all or nothing.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "encode/frame.hpp"
+#include "encode/result.hpp"
+#include "job/frame_job.hpp"
+#include "job/request.hpp"
+
+namespace hdrd::job {
+
+// The EXR files of a sequence, in order: a printf pattern ("shot.%04d.exr": every number
+// that exists, from the lowest, consecutive: a gap is an error naming the missing frame),
+// a directory (its *.exr files in name order), or a list file (one path per line, relative
+// to the list's directory; blank lines and '#' comments skipped). Errors: input.sequence.
+Result<std::vector<std::filesystem::path>> exr_sequence_files(const std::filesystem::path& spec);
+// True for what only a sequence can be: a printf pattern, a directory, a list file (.txt, .lst).
+bool names_a_sequence(const std::filesystem::path& spec);
+// True when the request JSON sets any setting marked `sequence` (job/settings.hpp).
+bool sets_sequence_settings(const nlohmann::json& request);
+
+struct SequenceProgress {
+  int frames_done = 0;
+  int frames_total = 0;
+  double elapsed_s = 0;
+  double fps = 0;    // frames done per second so far
+  double eta_s = 0;  // time left at that rate
+};
+
+struct SequenceOptions {
+  JobOptions job;                 // threads, scene files, cancellation (should_stop)
+  // After every frame written, on the writer thread (the CLI's bar, the daemon's job state).
+  std::function<void(const SequenceProgress&)> progress;
+  // Live output (hdrd render --present): every encoded frame in order, on the writer
+  // thread, after its dumps; an error stops the sequence.
+  std::function<Result<void>(const EncodedFrame& frame, int index)> on_frame;
+  std::size_t queue_depth = 2;    // frames between the render/encode stage and the writer
+};
+
+struct SequenceResult {
+  nlohmann::json sidecar;                      // OUTBASE.json as written
+  std::map<std::string, std::string> files;    // kind -> path: video, sidecar, hdr10plus, dovi, frames (a pattern)
+  int frames = 0;
+  std::vector<std::string> warnings;
+  nlohmann::json timings_ms = nlohmann::json::object();  // totals per stage
+};
+
+// Runs a sequence request (FrameRequest::sequence, source render or encode) into OUTBASE*.
+// `renderer`: the render requests' (made here when null). The EXR frames come from the
+// request's `images` setting.
+Result<SequenceResult> run_sequence(const FrameRequest& request, const std::filesystem::path& outbase,
+                                    const SequenceOptions& options, shading::Renderer* renderer = nullptr);
+
+}  // namespace hdrd::job

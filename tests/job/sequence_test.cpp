@@ -1,0 +1,320 @@
+// The sequence job (job/sequence.hpp): frame inputs (patterns, directories, lists), the
+// temporal decisions seen through its outputs (manual exposure = each frame's single-frame
+// encode, a static scene gives identical frames, a cut resets adaptation, the step response
+// follows the exponential model computed here), sequence MaxCLL/MaxFALL recomputed from the
+// decoded raw frames with the PQ EOTF (ST 2084, tests/testing/standards.hpp), all or
+// nothing on errors, and every sequence setting read.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "encode/io/io.hpp"
+#include "job/frame_job.hpp"
+#include "job/sequence.hpp"
+#include "tests/testing/standards.hpp"
+#include "tests/testing/testing.hpp"
+
+namespace hdrd::job {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kW = 32, kH = 16;
+
+ParseContext context(Source source, bool sequence) {
+  ParseContext ctx;
+  ctx.source = source;
+  ctx.spelling = Spelling::json;
+  ctx.reach = Reach::cli;
+  ctx.sequence = sequence;
+  ctx.resolve_path = [](std::string_view p, const std::string&) -> Result<fs::path> { return fs::path(p); };
+  return ctx;
+}
+
+// A relative EXR: a ramp times `gain` (a brighter shot for larger gains).
+void write_shot(const fs::path& p, double gain, int w = kW, int h = kH) {
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c)
+        img.rgba[(static_cast<std::size_t>(y) * w + x) * 4 + c] =
+            static_cast<float>(gain * 0.02 * (x + 1) * (1 + 0.3 * c) * (1 + 0.05 * y));
+  ASSERT_TRUE(io::write_exr(p, img, {}).ok());
+}
+
+FrameRequest parse(const json& body, Source source, bool sequence) {
+  auto r = parse_request_json(body, context(source, sequence));
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? *r : FrameRequest{};
+}
+
+Result<SequenceResult> run(const json& body, const fs::path& outbase, SequenceOptions options = {}) {
+  auto r = parse_request_json(body, context(Source::encode, true));
+  if (!r) return r.error();
+  return run_sequence(*r, outbase, options);
+}
+
+// The raw frame of a single-frame encode of `exr` with `body`'s settings.
+std::vector<std::uint8_t> single_frame_raw(json body, const fs::path& exr) {
+  body.erase("images");
+  if (body.contains("exposure")) body["exposure"].erase("adaptation_time_s");  // a sequence setting
+  body["formats"] = {"raw"};
+  auto job = FrameJob::create(parse(body, Source::encode, false), {}, EncodeInput{exr, {}, ""});
+  EXPECT_TRUE(job.ok());
+  auto r = run_frame_job(**job);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return r.ok() ? r->frame.data : std::vector<std::uint8_t>{};
+}
+
+std::vector<std::uint8_t> read_bytes(const fs::path& p) {
+  const std::string s = testing::read_file(p);
+  return {s.begin(), s.end()};
+}
+
+json read_json(const fs::path& p) { return json::parse(testing::read_file(p)); }
+
+// ---- inputs ------------------------------------------------------------------------------
+
+TEST(SequenceInputs, PatternTakesConsecutiveNumbersFromTheLowest) {
+  testing::TempDir d;
+  for (int i : {7, 8, 9, 10}) std::ofstream(d / fmt::format("shot.{:04d}.exr", i)) << "x";
+  std::ofstream(d / "shot.12345.exr") << "x";  // more digits than %04d writes with a leading digit: 12345 is a frame
+  std::ofstream(d / "shot.0011.exr.bak") << "x";
+  std::ofstream(d / "other.0011.exr") << "x";
+  auto files = exr_sequence_files(d / "shot.%04d.exr");
+  ASSERT_FALSE(files.ok());  // 11..12344 missing
+  EXPECT_NE(files.error().message.find("frame 11 is missing"), std::string::npos) << files.error().message;
+  fs::remove(d / "shot.12345.exr");
+  files = exr_sequence_files(d / "shot.%04d.exr");
+  ASSERT_TRUE(files.ok()) << files.error().message;
+  ASSERT_EQ(files->size(), 4u);
+  EXPECT_EQ(files->front().filename(), "shot.0007.exr");
+  EXPECT_EQ(files->back().filename(), "shot.0010.exr");
+  EXPECT_TRUE(names_a_sequence(d / "shot.%04d.exr"));
+  EXPECT_FALSE(names_a_sequence(d / "shot.0007.exr"));
+}
+
+TEST(SequenceInputs, PlainPercentDTakesNoLeadingZeros) {
+  testing::TempDir d;
+  for (int i : {1, 2, 3}) std::ofstream(d / fmt::format("f{}.exr", i)) << "x";
+  std::ofstream(d / "f01.exr") << "x";  // not what %d writes
+  auto files = exr_sequence_files(d / "f%d.exr");
+  ASSERT_TRUE(files.ok()) << files.error().message;
+  EXPECT_EQ(files->size(), 3u);
+}
+
+TEST(SequenceInputs, DirectoryAndListFile) {
+  testing::TempDir d;
+  fs::create_directory(d / "dir");
+  for (const char* n : {"b.exr", "a.exr", "c.EXR", "notes.txt"}) std::ofstream(d / "dir" / n) << "x";
+  auto files = exr_sequence_files(d / "dir");
+  ASSERT_TRUE(files.ok()) << files.error().message;
+  ASSERT_EQ(files->size(), 3u);
+  EXPECT_EQ((*files)[0].filename(), "a.exr");
+  EXPECT_EQ((*files)[2].filename(), "c.EXR");
+  std::ofstream(d / "list.txt") << "# shots\n dir/b.exr \n\n" << (d / "dir" / "a.exr").string() << "\r\n";
+  files = exr_sequence_files(d / "list.txt");
+  ASSERT_TRUE(files.ok()) << files.error().message;
+  ASSERT_EQ(files->size(), 2u);
+  EXPECT_EQ((*files)[0], d.path() / "dir" / "b.exr");  // relative to the list
+  EXPECT_EQ((*files)[1], d.path() / "dir" / "a.exr");
+  std::ofstream(d / "empty.txt") << "# nothing\n";
+  EXPECT_FALSE(exr_sequence_files(d / "empty.txt").ok());
+  EXPECT_EQ(exr_sequence_files(d / "nothing.%03d.exr").error().code, "input.sequence");
+  EXPECT_EQ(exr_sequence_files(d / "dir" / "a.exr").error().code, "input.sequence");
+}
+
+TEST(SequenceRequest, SequenceSettingsExistOnlyInSequences) {
+  auto r = parse_request_json(json{{"frames", 3}}, context(Source::encode, false));
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "request.unknown_field");
+  EXPECT_NE(r.error().message.find("sequence"), std::string::npos);
+  EXPECT_TRUE(sets_sequence_settings(json{{"video", {{"codec", "hevc"}}}}));
+  EXPECT_TRUE(sets_sequence_settings(json{{"exposure", {{"adaptation_time_s", 1}}}}));
+  EXPECT_FALSE(sets_sequence_settings(json{{"exposure", {{"mode", "manual"}}}, {"video", 1}}));
+  // A single frame's canonical request has no sequence settings (its sidecar is unchanged).
+  const json c = parse(json::object(), Source::encode, false).canonical();
+  EXPECT_FALSE(c.contains("frames"));
+  EXPECT_FALSE(c.contains("video"));
+}
+
+// ---- the time axis -----------------------------------------------------------------------
+
+TEST(Sequence, ManualExposureGivesEachFrameItsSingleFrameEncode) {
+  testing::TempDir d;
+  for (int i = 0; i < 4; ++i) write_shot(d / fmt::format("s.{}.exr", i), std::pow(2.0, 2 * i));
+  const json body = {{"images", (d / "s.%d.exr").string()},
+                     {"exposure", {{"mode", "manual"}, {"adaptation_time_s", 2}}},
+                     {"formats", {"raw"}}};
+  auto r = run(body, d / "out");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->frames, 4);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(read_bytes(d / fmt::format("out.{:05d}.raw", i)), single_frame_raw(body, d / fmt::format("s.{}.exr", i)))
+        << "frame " << i;
+}
+
+TEST(Sequence, StaticSceneFramesAreIdentical) {
+  testing::TempDir d;
+  for (int i = 0; i < 5; ++i) write_shot(d / fmt::format("s.{}.exr", i), 4.0);
+  const json body = {{"images", (d / "s.%d.exr").string()},
+                     {"exposure", {{"mode", "histogram"}, {"adaptation_time_s", 1}}},
+                     {"tone", {{"curve", "bt2390"}}},
+                     {"formats", {"raw"}}};
+  auto r = run(body, d / "out");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const auto first = read_bytes(d / "out.00000.raw");
+  ASSERT_EQ(first.size(), static_cast<std::size_t>(kW * kH * 4));
+  for (int i = 1; i < 5; ++i) EXPECT_EQ(read_bytes(d / fmt::format("out.{:05d}.raw", i)), first) << "frame " << i;
+  const json& frames = r->sidecar["frames"];
+  for (const auto& f : frames) EXPECT_EQ(f["exposure_scale"], frames[0]["exposure_scale"]);
+  EXPECT_EQ(r->sidecar["scenes"].size(), 1u);
+}
+
+// Three frames of a dim shot, then a shot 6 stops brighter.
+struct CutSequence {
+  testing::TempDir d;
+  CutSequence() {
+    for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 0.25);
+    for (int i = 3; i < 8; ++i) write_shot(d / fmt::format("s.{}.exr", i), 16.0);
+  }
+  json body(bool detect_cuts, double tau_s) const {
+    return {{"images", (d / "s.%d.exr").string()},
+            {"fps", 10},
+            {"exposure", {{"mode", "histogram"}, {"adaptation_time_s", tau_s}}},
+            {"sequence", {{"detect_cuts", detect_cuts}}},
+            {"formats", {"raw"}}};
+  }
+  // The exposure scale a single frame of that shot is metered to.
+  double own_scale(int frame) const {
+    json b = body(true, 0);
+    b.erase("images");
+    b.erase("fps");
+    b.erase("sequence");
+    b["exposure"].erase("adaptation_time_s");
+    auto job = FrameJob::create(parse(b, Source::encode, false), {}, EncodeInput{d / fmt::format("s.{}.exr", frame), {}, ""});
+    auto r = run_frame_job(**job);
+    return r->frame.settings["exposure"]["scale"].get<double>();
+  }
+};
+
+TEST(Sequence, CutResetsAdaptation) {
+  CutSequence s;
+  auto r = run(s.body(true, 1.0), s.d / "out");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const json& scenes = r->sidecar["scenes"];
+  ASSERT_EQ(scenes.size(), 2u) << scenes.dump();
+  EXPECT_EQ(scenes[0], (json{{"first_frame", 0}, {"last_frame", 2}}));
+  EXPECT_EQ(scenes[1], (json{{"first_frame", 3}, {"last_frame", 7}}));
+  // The new scene's first frame is exposed from its own metering, as a single frame.
+  EXPECT_EQ(read_bytes(s.d / "out.00003.raw"), single_frame_raw(json{{"exposure", {{"mode", "histogram"}}}}, s.d / "s.3.exr"));
+  EXPECT_EQ(r->sidecar["frames"][3]["scene"], 1);
+  EXPECT_TRUE(r->sidecar["frames"][3]["scene_start"].get<bool>());
+}
+
+TEST(Sequence, StepResponseFollowsTheExponentialInStops) {
+  CutSequence s;
+  const double tau = 0.4, dt = 0.1;
+  auto r = run(s.body(false, tau), s.d / "out");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const double a = std::log2(s.own_scale(0)), b = std::log2(s.own_scale(3));
+  ASSERT_GT(std::abs(a - b), 5.0);
+  const json& frames = r->sidecar["frames"];
+  ASSERT_EQ(r->sidecar["scenes"].size(), 1u);
+  // RTR4 §8.2.2: frame n is exposed from frame n-1's metering, approaching it as
+  // d(log2 S)/dt = (log2 T - log2 S) / tau, solved exactly over each frame interval.
+  double expected = a;
+  for (int n = 0; n < 8; ++n) {
+    if (n >= 4) expected += (b - expected) * (1 - std::exp(-dt / tau));
+    EXPECT_NEAR(std::log2(frames[n]["exposure_scale"].get<double>()), expected, 1e-9) << "frame " << n;
+  }
+}
+
+TEST(Sequence, ContentLightRecomputedFromTheDecodedFrames) {
+  testing::TempDir d;
+  for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 2.0 + 6.0 * i);
+  const json body = {{"images", (d / "s.%d.exr").string()},
+                     {"display", {{"mode", "hdr10"}, {"peak_nits", 1000}}},
+                     {"formats", {"raw"}}};
+  auto r = run(body, d / "out");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  // XB30 (DRM_FORMAT_XBGR2101010): R in bits 0-9, G 10-19, B 20-29; full-range PQ codes.
+  double max_cll = 0, max_fall = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto raw = read_bytes(d / fmt::format("out.{:05d}.raw", i));
+    ASSERT_EQ(raw.size(), static_cast<std::size_t>(kW * kH * 4));
+    double sum = 0;
+    for (std::size_t p = 0; p < raw.size(); p += 4) {
+      const std::uint32_t v = raw[p] | raw[p + 1] << 8 | raw[p + 2] << 16 | static_cast<std::uint32_t>(raw[p + 3]) << 24;
+      const int code = std::max({static_cast<int>(v & 1023), static_cast<int>(v >> 10 & 1023), static_cast<int>(v >> 20 & 1023)});
+      const double nits = testing::standard::pq_eotf(code / 1023.0);
+      max_cll = std::max(max_cll, nits);
+      sum += nits;
+    }
+    max_fall = std::max(max_fall, sum / (kW * kH));
+  }
+  const json& cll = r->sidecar["content_light_level"];
+  EXPECT_NEAR(cll["max_cll_nits_measured"].get<double>(), max_cll, max_cll * 1e-3);
+  EXPECT_NEAR(cll["max_fall_nits_measured"].get<double>(), max_fall, max_fall * 1e-3);
+  EXPECT_EQ(cll["max_cll_nits"].get<double>(), std::ceil(cll["max_cll_nits_measured"].get<double>()));
+  // Per frame, the same quantities of that frame alone; the sequence's are their maxima.
+  double frame_max = 0;
+  for (const auto& f : r->sidecar["frames"]) frame_max = std::max(frame_max, f["max_cll_nits"].get<double>());
+  EXPECT_DOUBLE_EQ(frame_max, cll["max_cll_nits_measured"].get<double>());
+  EXPECT_TRUE(fs::exists(d / "out.hdr10plus.json"));
+  EXPECT_TRUE(fs::exists(d / "out.dovi.json"));
+  EXPECT_EQ(read_json(d / "out.json")["frames"].size(), 3u);
+  EXPECT_EQ(read_json(d / "out.00001.json")["format"], "hdrd-dump");
+}
+
+TEST(Sequence, AnErrorLeavesNothingBehind) {
+  testing::TempDir d;
+  fs::create_directory(d / "in");
+  for (int i = 0; i < 3; ++i) write_shot(d / "in" / fmt::format("s.{}.exr", i), 1.0);
+  write_shot(d / "in" / "s.3.exr", 1.0, kW * 2, kH);  // another size: the video cannot take it
+  fs::create_directory(d / "out");
+  const json body = {{"images", (d / "in" / "s.%d.exr").string()}, {"video", {{"codec", "hevc"}}}, {"formats", {"png"}}};
+  auto r = run(body, d / "out" / "seq");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("frame 3 (s.3.exr)"), std::string::npos) << r.error().message;
+  EXPECT_TRUE(fs::is_empty(d / "out")) << fs::directory_iterator(d / "out")->path();
+}
+
+TEST(Sequence, CancellationStopsAndRemovesTheFrames) {
+  testing::TempDir d;
+  for (int i = 0; i < 6; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0);
+  fs::create_directory(d / "out");
+  SequenceOptions o;
+  int progress_calls = 0;
+  o.progress = [&](const SequenceProgress& p) {
+    ++progress_calls;
+    EXPECT_EQ(p.frames_total, 6);
+    EXPECT_EQ(p.frames_done, progress_calls);
+  };
+  std::atomic<int> checks{0};
+  o.job.should_stop = [&] { return ++checks > 8; };
+  auto r = run({{"images", (d / "s.%d.exr").string()}, {"formats", {"raw"}}}, d / "out" / "seq", o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "request.cancelled");
+  EXPECT_TRUE(fs::is_empty(d / "out"));
+}
+
+TEST(Sequence, EverySequenceSettingIsRead) {
+  testing::TempDir d;
+  for (int i = 0; i < 2; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0);
+  auto req = parse_request_json(json{{"images", (d / "s.%d.exr").string()}, {"formats", {"raw"}}},
+                                context(Source::encode, true));
+  ASSERT_TRUE(req.ok());
+  auto r = run_sequence(*req, d / "out", {});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  for (const auto& s : settings())
+    if (s.sequence && s.takes(Source::encode)) EXPECT_TRUE(req->read.count(s.path)) << s.path << " is never read";
+}
+
+}  // namespace
+}  // namespace hdrd::job
