@@ -378,6 +378,9 @@ class SequenceSink {
       auto v = writer_->finish(&*metadata_);
       if (!v) return v.error();
       timings_["video"] = timings_.value("video", 0.0) + seconds_since(t0) * 1e3;
+      timings_["video_ycbcr"] = v->convert_ms;
+      timings_["video_encoder"] = v->encoder_ms;
+      timings_["video_mux"] = v->mux_ms;
       written_.push_back(v->path.string());
       nlohmann::json vj = v->to_json();
       vj["file"] = v->path.filename().string();

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -150,6 +151,7 @@ struct SequenceWriter::Impl {
   FilePtr spool;
   int frames = 0;
   ContentLightLevel frames_light;  // from EncodedFrame::content_light, when no metadata is given
+  double convert_ms = 0, encoder_ms = 0, mux_ms = 0;  // wall time in each stage (VideoResult)
   bool failed = false, done = false;
   bool opened = false, flushed = false;  // the encoder's state, for close_encoder()
 
@@ -216,7 +218,10 @@ struct SequenceWriter::Impl {
     if (const int rc = av_frame_make_writable(frame.get()); rc < 0) return av_fail("video.encoder", "frame buffer", rc);
     const Planes420 planes{{frame->data[0], frame->linesize[0]}, {frame->data[1], frame->linesize[1]},
                            {frame->data[2], frame->linesize[2]}};
+    const auto t0 = std::chrono::steady_clock::now();
     if (auto ok = rgb_to_ycbcr420(f, ycbcr, planes); !ok) return ok;
+    const auto t1 = std::chrono::steady_clock::now();
+    convert_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
     frame->pts = frames;
     frame->pict_type = o.keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
     if (const int rc = avcodec_send_frame(enc.get(), frame.get()); rc < 0)
@@ -224,7 +229,9 @@ struct SequenceWriter::Impl {
     frames_light.max_cll_nits = std::max(frames_light.max_cll_nits, f.content_light.max_cll_nits);
     frames_light.max_fall_nits = std::max(frames_light.max_fall_nits, f.content_light.max_fall_nits);
     ++frames;
-    return spool_packets();
+    auto spooled = spool_packets();
+    encoder_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+    return spooled;
   }
 
   Result<VideoResult> mux(const SequenceMetadata* meta);
@@ -424,6 +431,9 @@ Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const Se
 VideoResult SequenceWriter::Impl::result(const SequenceMetadata* meta, const io::Cta861Light& cll) const {
   VideoResult v;
   v.path = output;
+  v.convert_ms = convert_ms;
+  v.encoder_ms = encoder_ms;
+  v.mux_ms = mux_ms;
   v.codec = std::string(to_string(settings.codec));
   v.encoder = config.encoder;
   v.profile = config.profile;
@@ -445,8 +455,11 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
   if (meta && meta->frame_count() != frames)
     return make_error("video.metadata", fmt::format("metadata covers {} frames, the video has {}", meta->frame_count(), frames));
   flushed = true;
+  const auto t0 = std::chrono::steady_clock::now();
   if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
   if (auto ok = spool_packets(); !ok) return ok.error();
+  const auto t1 = std::chrono::steady_clock::now();
+  encoder_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
   if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
     return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
 
@@ -469,6 +482,7 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
   if (::rename(output_temp.c_str(), output.c_str()) != 0)
     return make_error("io.write", fmt::format("cannot rename {} to {}: {}", output_temp.string(), output.string(), std::strerror(errno)));
   output_temp.clear();
+  mux_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
   return result(meta, cll);
 }
 

@@ -85,6 +85,9 @@ struct VideoResult {
   std::uint64_t bytes = 0;
   std::optional<ContentLightLevel> content_light;  // carried values (whole cd/m2), HDR only
   bool hdr10plus = false;     // HDR10+ in every frame
+  // Wall time in hdrd's R'G'B' -> Y'CbCr conversion, in the encoder's calls (its own
+  // threads run beside them) and in the final mux; not in to_json (the bytes' description).
+  double convert_ms = 0, encoder_ms = 0, mux_ms = 0;
   nlohmann::json to_json() const;
 };
 
