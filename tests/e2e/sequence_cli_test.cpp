@@ -1,0 +1,204 @@
+// `hdrd encode 'shot.%d.exr' --video ...` and `hdrd render --frames` end to end, checked with
+// third-party tools: ffprobe for codec, profile, pixel format, H.273 colour tags and the
+// mastering / content-light / HDR10+ side data; ffmpeg's decoder for the pictures, whose
+// Y' in lossless mode is the BT.2020 (non-constant luminance) Y' of the per-frame raw dumps,
+// computed here from the equations (BT.2020 Table 4, BT.2100 narrow-range quantisation);
+// the HDR10+ JSON against ST 2094-40's ranges; and the command line's contract (one line on
+// error, nothing left behind, --json is the sidecar).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "encode/io/io.hpp"
+#include "tests/testing/testing.hpp"
+
+namespace fs = std::filesystem;
+using hdrd::testing::run_command;
+using hdrd::testing::TempDir;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kW = 64, kH = 32;
+
+std::string hdrd() { return hdrd::testing::hdrd_binary().string(); }
+bool have(const char* tool) { return run_command(fmt::format("{} -version", tool)).exit_code == 0; }
+
+// Shots of a moving gradient (a different picture each frame), relative Rec.709.
+void write_shots(const fs::path& dir, int n, double gain = 1.0) {
+  for (int i = 0; i < n; ++i) {
+    hdrd::Image img(kW, kH);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        float* p = img.rgba.data() + (static_cast<std::size_t>(y) * kW + x) * 4;
+        const double u = std::fmod((x + 3.0 * i) / kW, 1.0);
+        p[0] = static_cast<float>(gain * 4 * u * u);
+        p[1] = static_cast<float>(gain * (0.1 + 0.8 * y / kH));
+        p[2] = static_cast<float>(gain * 2 * (1 - u));
+      }
+    ASSERT_TRUE(hdrd::io::write_exr(dir / fmt::format("s.{}.exr", i), img, {}).ok());
+  }
+}
+
+json ffprobe(const fs::path& file) {
+  const auto r = run_command("ffprobe -v error -show_streams -show_frames -of json '" + file.string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return r.exit_code == 0 ? json::parse(r.out) : json::object();
+}
+
+const json* side_data(const json& frame, const std::string& type) {
+  if (!frame.contains("side_data_list")) return nullptr;
+  for (const auto& s : frame["side_data_list"])
+    if (s.value("side_data_type", "") == type) return &s;
+  return nullptr;
+}
+
+std::vector<std::uint8_t> slurp(const fs::path& p) {
+  const std::string s = hdrd::testing::read_file(p);
+  return {s.begin(), s.end()};
+}
+
+TEST(SequenceCli, LosslessHevcCarriesTheDumpsYPrimeAndItsTags) {
+  if (!have("ffprobe") || !have("ffmpeg")) GTEST_SKIP() << "ffprobe/ffmpeg missing (apt-get install ffmpeg)";
+  TempDir d;
+  write_shots(d.path(), 6);
+  const fs::path out = d / "seq";
+  const auto r = run_command(fmt::format("'{}' encode '{}' --mode hdr10 --peak 1000 --video hevc --video-lossless "
+                                         "--format raw --fps 30 -o '{}' --json",
+                                         hdrd(), (d / "s.%d.exr").string(), out.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json sidecar = json::parse(r.out);
+  EXPECT_EQ(sidecar["format"], "hdrd-sequence");
+  EXPECT_EQ(sidecar, json::parse(hdrd::testing::read_file(d / "seq.json")));
+  ASSERT_EQ(sidecar["frames"].size(), 6u);
+  EXPECT_EQ(sidecar["files"]["video"], "seq.mp4");
+  EXPECT_EQ(sidecar["files"]["frames"]["raw"], "seq.%05d.raw");
+
+  const json probe = ffprobe(d / "seq.mp4");
+  ASSERT_EQ(probe["streams"].size(), 1u);
+  const json& st = probe["streams"][0];
+  EXPECT_EQ(st["codec_name"], "hevc");
+  EXPECT_EQ(st["profile"], "Main 10");
+  EXPECT_EQ(st["pix_fmt"], "yuv420p10le");
+  EXPECT_EQ(st["color_primaries"], "bt2020");
+  EXPECT_EQ(st["color_transfer"], "smpte2084");
+  EXPECT_EQ(st["color_space"], "bt2020nc");
+  EXPECT_EQ(st["color_range"], "tv");
+  EXPECT_EQ(st["r_frame_rate"], "30/1");
+  ASSERT_EQ(probe["frames"].size(), 6u);
+  const json& f0 = probe["frames"][0];
+  const json* mdcv = side_data(f0, "Mastering display metadata");
+  const json* clli = side_data(f0, "Content light level metadata");
+  ASSERT_TRUE(mdcv && clli) << f0.dump();
+  EXPECT_EQ((*clli)["max_content"].get<double>(), sidecar["content_light_level"]["max_cll_nits"].get<double>());
+  EXPECT_EQ((*clli)["max_average"].get<double>(), sidecar["content_light_level"]["max_fall_nits"].get<double>());
+  EXPECT_EQ((*mdcv)["max_luminance"], "10000000/10000");  // ST 2086 from the target: 1000 cd/m2
+  for (const auto& f : probe["frames"])
+    EXPECT_NE(side_data(f, "HDR Dynamic Metadata SMPTE2094-40 (HDR10+)"), nullptr) << "HDR10+ in every frame";
+
+  // Decoded Y' against the BT.2020 equations on each per-frame raw dump (XB30: full-range
+  // 10-bit R'G'B' PQ codes, R in bits 0-9): Y' = 0.2627 R' + 0.6780 G' + 0.0593 B',
+  // narrow-range code = round((219 Y' + 16) * 4).
+  const fs::path yuv = d / "decoded.yuv";
+  ASSERT_EQ(run_command(fmt::format("ffmpeg -v error -i '{}' -f rawvideo -pix_fmt yuv420p10le '{}'",
+                                    (d / "seq.mp4").string(), yuv.string()))
+                .exit_code,
+            0);
+  const auto decoded = slurp(yuv);
+  const std::size_t frame_bytes = kW * kH * 2 * 3 / 2;
+  ASSERT_EQ(decoded.size(), 6 * frame_bytes);
+  for (int i = 0; i < 6; ++i) {
+    const auto raw = slurp(d / fmt::format("seq.{:05d}.raw", i));
+    ASSERT_EQ(raw.size(), static_cast<std::size_t>(kW * kH * 4));
+    int worst = 0;
+    for (int p = 0; p < kW * kH; ++p) {
+      const std::uint32_t v = raw[p * 4] | raw[p * 4 + 1] << 8 | raw[p * 4 + 2] << 16 |
+                              static_cast<std::uint32_t>(raw[p * 4 + 3]) << 24;
+      const double r = (v & 1023) / 1023.0, g = (v >> 10 & 1023) / 1023.0, b = (v >> 20 & 1023) / 1023.0;
+      const double y = 0.2627 * r + 0.6780 * g + 0.0593 * b;
+      const int expected = static_cast<int>(std::lround((219 * y + 16) * 4));
+      const std::size_t at = i * frame_bytes + static_cast<std::size_t>(p) * 2;
+      const int got = decoded[at] | decoded[at + 1] << 8;
+      worst = std::max(worst, std::abs(got - expected));
+    }
+    EXPECT_LE(worst, 1) << "frame " << i << ": decoded Y' off the equations by " << worst << " codes";
+  }
+}
+
+TEST(SequenceCli, Hdr10PlusJsonIsWithinSt2094_40) {
+  TempDir d;
+  write_shots(d.path(), 4, 8.0);
+  const auto r = run_command(fmt::format("'{}' encode '{}' --format raw -o '{}' -q", hdrd(), (d / "s.%d.exr").string(),
+                                         (d / "seq").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(hdrd::testing::read_file(d / "seq.hdr10plus.json"));
+  ASSERT_EQ(j["SceneInfo"].size(), 4u);
+  int index = 0;
+  for (const auto& s : j["SceneInfo"]) {
+    EXPECT_EQ(s["SequenceFrameIndex"], index++);
+    EXPECT_EQ(s["NumberOfWindows"], 1);
+    const auto& lp = s["LuminanceParameters"];
+    // ST 2094-40 §6.1: maxscl and average_maxrgb in 0.1 cd/m2, 0..100000; distribution
+    // percentages 1..99 increasing, values non-decreasing within 0..100000.
+    for (const auto& m : lp["MaxScl"]) EXPECT_TRUE(m >= 0 && m <= 100000) << m;
+    EXPECT_TRUE(lp["AverageRGB"] >= 0 && lp["AverageRGB"] <= 100000);
+    const auto& idx = lp["LuminanceDistributions"]["DistributionIndex"];
+    const auto& val = lp["LuminanceDistributions"]["DistributionValues"];
+    ASSERT_EQ(idx.size(), val.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      EXPECT_TRUE(idx[k] >= 0 && idx[k] <= 100);
+      EXPECT_TRUE(val[k] >= 0 && val[k] <= 100000);
+      if (k > 0) EXPECT_GT(idx[k].get<int>(), idx[k - 1].get<int>());
+      if (k > 0) EXPECT_GE(val[k].get<int>(), val[k - 1].get<int>());
+    }
+    const int max_scl = std::max({lp["MaxScl"][0].get<int>(), lp["MaxScl"][1].get<int>(), lp["MaxScl"][2].get<int>()});
+    EXPECT_LE(lp["AverageRGB"].get<int>(), max_scl);
+    EXPECT_TRUE(s["TargetedSystemDisplayMaximumLuminance"] >= 0 && s["TargetedSystemDisplayMaximumLuminance"] <= 10000);
+  }
+}
+
+TEST(SequenceCli, ErrorsAreOneLineAndLeaveNothing) {
+  TempDir d;
+  fs::create_directory(d / "in");
+  write_shots(d / "in", 2);
+  fs::create_directory(d / "out");
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {"encode '" + (d / "in" / "nothing.%d.exr").string() + "' --video hevc", "no file matches"},
+      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --frames 3", "frames: 3 asked"},
+      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --video h264 --mode hdr10", "h264"},
+      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --video vp9", "--video"},
+      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --fps 0", "--fps"},
+      {"pattern bt2111 --frames 3", "frames"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_command(fmt::format("'{}' {} -o '{}' -q", hdrd(), c.args, (d / "out" / "x").string()));
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << ": " << r.err;
+    EXPECT_TRUE(fs::is_empty(d / "out")) << c.args;
+  }
+}
+
+TEST(SequenceCli, RenderSequenceOfAStillSceneIsSteady) {
+  TempDir d;
+  const auto r = run_command(fmt::format("'{}' render --scene furnace --width 48 --height 32 --samples 1 --frames 3 "
+                                         "--format raw -o '{}' -q --json",
+                                         hdrd(), (d / "r").string()));
+  if (r.exit_code != 0 && r.err.find("render.") != std::string::npos) GTEST_SKIP() << "no GL renderer: " << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(r.out);
+  ASSERT_EQ(j["frames"].size(), 3u);
+  EXPECT_DOUBLE_EQ(j["frames"][2]["time_s"].get<double>(), 2.0 / 24);
+  EXPECT_EQ(slurp(d / "r.00000.raw"), slurp(d / "r.00002.raw"));
+  EXPECT_EQ(j["frames"][0]["exposure_scale"], j["frames"][2]["exposure_scale"]);
+}
+
+}  // namespace
