@@ -173,7 +173,7 @@ TEST(SequenceCli, ErrorsAreOneLineAndLeaveNothing) {
   const std::vector<Case> cases = {
       {"encode '" + (d / "in" / "nothing.%d.exr").string() + "' --video hevc", "no file matches"},
       {"encode '" + (d / "in" / "s.%d.exr").string() + "' --frames 3", "frames: 3 asked"},
-      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --video h264 --mode hdr10", "h264"},
+      {"encode '" + (d / "in" / "s.%d.exr").string() + "' --video h264 --mode hdr10", "H.264 video is for SDR only"},
       {"encode '" + (d / "in" / "s.%d.exr").string() + "' --video vp9", "--video"},
       {"encode '" + (d / "in" / "s.%d.exr").string() + "' --fps 0", "--fps"},
       {"pattern bt2111 --frames 3", "frames"},
