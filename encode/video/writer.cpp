@@ -235,6 +235,8 @@ struct SequenceWriter::Impl {
   }
 
   Result<VideoResult> mux(const SequenceMetadata* meta);
+  Result<void> write_segment(const fs::path& segment);
+  Result<void> append_segment(const fs::path& segment, int index);
   Result<AVStream*> start_muxer(Muxer& m, const io::Cta861Light& cll);
   Result<void> copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta, const io::Cta861Light& cll);
   VideoResult result(const SequenceMetadata* meta, const io::Cta861Light& cll) const;
@@ -314,6 +316,119 @@ Result<VideoResult> SequenceWriter::finish(const SequenceMetadata* metadata) {
   }
   impl_->done = true;
   return r;
+}
+
+// ---- segments of a sharded sequence ----------------------------------------------------------
+
+namespace {
+// A segment file: the magic, the encoder's parameter sets (extradata), the frame count,
+// then the spool's records (SpoolRecord + bytes) with frame-local timestamps.
+constexpr char kSegmentMagic[8] = {'H', 'D', 'R', 'D', 'V', 'S', 'G', '1'};
+constexpr std::uint32_t kMaxExtradata = 1u << 20;
+}  // namespace
+
+Result<void> SequenceWriter::Impl::write_segment(const fs::path& segment) {
+  if (frames == 0) return make_error("video.empty", "a video segment needs at least one frame", "frames");
+  flushed = true;
+  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
+  if (auto ok = spool_packets(); !ok) return ok.error();
+  if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
+    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+  fs::path temp;
+  auto fd = io::create_temp_file(segment, temp);
+  if (!fd) return fd.error();
+  FilePtr out(::fdopen(*fd, "wb"));
+  if (!out) {
+    ::close(*fd);
+    ::unlink(temp.c_str());
+    return make_error("io.write", fmt::format("cannot write {}: {}", temp.string(), std::strerror(errno)));
+  }
+  const std::uint32_t extra = enc->extradata_size > 0 ? static_cast<std::uint32_t>(enc->extradata_size) : 0;
+  const std::uint32_t count = static_cast<std::uint32_t>(frames);
+  bool ok = std::fwrite(kSegmentMagic, sizeof kSegmentMagic, 1, out.get()) == 1 &&
+            std::fwrite(&extra, sizeof extra, 1, out.get()) == 1 &&
+            (extra == 0 || std::fwrite(enc->extradata, 1, extra, out.get()) == extra) &&
+            std::fwrite(&count, sizeof count, 1, out.get()) == 1;
+  std::vector<char> buf(1 << 16);
+  while (ok) {
+    const std::size_t n = std::fread(buf.data(), 1, buf.size(), spool.get());
+    if (n == 0) break;
+    ok = std::fwrite(buf.data(), 1, n, out.get()) == n;
+  }
+  ok = ok && std::fflush(out.get()) == 0 && ::fsync(::fileno(out.get())) == 0;
+  out.reset();
+  if (!ok || ::rename(temp.c_str(), segment.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(temp.c_str());
+    return make_error("io.write", fmt::format("cannot write the segment {}: {}", segment.string(), std::strerror(err)));
+  }
+  spool.reset();
+  ::unlink(spool_path.c_str());
+  spool_path.clear();
+  return {};
+}
+
+// Appends a segment's packets to this writer's spool, its timestamps moved after the
+// frames already there (the time base is one tick per frame).
+Result<void> SequenceWriter::Impl::append_segment(const fs::path& segment, int index) {
+  const std::string name = fmt::format("segment {} ({})", index, segment.filename().string());
+  FilePtr in(std::fopen(segment.c_str(), "rb"));
+  if (!in) return make_error("video.segment", fmt::format("{}: cannot open: {}", name, std::strerror(errno)));
+  char magic[sizeof kSegmentMagic];
+  std::uint32_t extra = 0, count = 0;
+  if (std::fread(magic, sizeof magic, 1, in.get()) != 1 || std::memcmp(magic, kSegmentMagic, sizeof magic) != 0)
+    return make_error("video.segment", name + ": not an hdrd video segment");
+  if (std::fread(&extra, sizeof extra, 1, in.get()) != 1 || extra > kMaxExtradata)
+    return make_error("video.segment", name + ": truncated or corrupt header");
+  std::vector<std::uint8_t> params(extra);
+  if (std::fread(params.data(), 1, extra, in.get()) != extra || std::fread(&count, sizeof count, 1, in.get()) != 1)
+    return make_error("video.segment", name + ": truncated header");
+  const std::uint8_t* mine = enc->extradata;
+  if (static_cast<int>(extra) != std::max(enc->extradata_size, 0) || (extra > 0 && std::memcmp(params.data(), mine, extra) != 0))
+    return make_error("video.segment", name + ": encoded with other parameters (its parameter sets differ from this "
+                                              "sequence's settings)");
+  const std::int64_t offset = frames;
+  std::uint32_t packets = 0;
+  for (;;) {
+    SpoolRecord r;
+    const std::size_t got = std::fread(&r, 1, sizeof r, in.get());
+    if (got == 0 && std::feof(in.get())) break;
+    if (got != sizeof r || r.size > (1u << 28))
+      return make_error("video.segment", fmt::format("{}: corrupt at packet {}", name, packets));
+    std::vector<std::uint8_t> data(r.size);
+    if (std::fread(data.data(), 1, data.size(), in.get()) != data.size())
+      return make_error("video.segment", fmt::format("{}: truncated at packet {}", name, packets));
+    if (r.pts < 0 || r.pts >= count)
+      return make_error("video.segment", fmt::format("{}: packet {} is for frame {} of {}", name, packets, r.pts, count));
+    r.pts += offset, r.dts += offset;
+    if (std::fwrite(&r, sizeof r, 1, spool.get()) != 1 || std::fwrite(data.data(), 1, data.size(), spool.get()) != data.size())
+      return make_error("io.write", fmt::format("cannot write the spool file {}", spool_path.string()));
+    ++packets;
+  }
+  if (packets != count) return make_error("video.segment", fmt::format("{}: {} packets for {} frames", name, packets, count));
+  frames += static_cast<int>(count);
+  return {};
+}
+
+Result<void> SequenceWriter::finish_segment(const fs::path& segment) {
+  if (impl_->done || impl_->failed)
+    return make_error("video.state", impl_->done ? "the video is already finished" : "the writer failed earlier");
+  auto ok = impl_->write_segment(segment);
+  impl_->failed = !ok;
+  impl_->done = ok.ok();
+  if (!ok) impl_->remove_files();
+  return ok;
+}
+
+Result<VideoResult> SequenceWriter::join_segments(const fs::path& outbase, const VideoSettings& settings,
+                                                  const StreamInfo& stream, std::span<const fs::path> segments,
+                                                  const SequenceMetadata& metadata) {
+  if (segments.empty()) return make_error("video.segment", "no segments to join");
+  auto w = open(outbase, settings, stream);
+  if (!w) return w.error();
+  for (std::size_t i = 0; i < segments.size(); ++i)
+    if (auto ok = (*w)->impl_->append_segment(segments[i], static_cast<int>(i)); !ok) return ok.error();
+  return (*w)->finish(&metadata);
 }
 
 // ---- the second pass: mux with the final metadata ---------------------------------------------

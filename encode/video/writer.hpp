@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -117,6 +118,16 @@ class SequenceWriter {
   Result<VideoResult> finish(const SequenceMetadata* metadata = nullptr);
   // Stops and removes every file this writer made.
   void cancel();
+
+  // Sharded sequences (docs/cluster.md): instead of finish(), flush the encoder and write
+  // its packets as a segment file (the spool with the encoder's parameter sets), atomically;
+  // join_segments() later muxes segments in order into one file without re-encoding. Every
+  // segment must come from the same settings and stream (its parameter sets are compared);
+  // each starts with a keyframe (a fresh encoder), so the joined stream decodes as one.
+  Result<void> finish_segment(const std::filesystem::path& segment);
+  static Result<VideoResult> join_segments(const std::filesystem::path& outbase, const VideoSettings& settings,
+                                           const StreamInfo& stream, std::span<const std::filesystem::path> segments,
+                                           const SequenceMetadata& metadata);
 
   int frames_written() const;
   const std::filesystem::path& output_path() const;

@@ -600,3 +600,69 @@ TEST(VideoWriter, SameFramesGiveTheSameBytes) {
 }
 
 }  // namespace
+
+// Sharded sequences: segments from separate writers, joined without re-encoding, decode to
+// the same pictures as one writer's video (lossless: the Y'CbCr of the frames exactly), carry
+// every frame's HDR10+ and the sequence's content light, and refuse a segment made with
+// other settings.
+TEST(VideoWriter, SegmentsJoinIntoOneStream) {
+  hdrd::testing::TempDir dir;
+  const auto frames = sequence(Mode::hdr10, 10, 6, 99);
+  VideoSettings s = settings(Codec::hevc);
+  s.lossless = true;
+  s.preset = "ultrafast";
+  const StreamInfo info{kW, kH, frames[0].target, frames[0].mastering};
+  std::vector<fs::path> segments;
+  for (int part = 0; part < 3; ++part) {
+    auto w = SequenceWriter::open(dir / fmt::format("part{}", part), s, info);
+    ASSERT_TRUE(w.ok()) << w.error().message;
+    for (int i = part * 2; i < part * 2 + 2; ++i) ASSERT_TRUE((*w)->write(frames[static_cast<std::size_t>(i)]).ok());
+    segments.push_back(dir / fmt::format("part{}.segment", part));
+    auto ok = (*w)->finish_segment(segments.back());
+    ASSERT_TRUE(ok.ok()) << ok.error().message;
+  }
+  for (const auto& e : fs::directory_iterator(dir.path()))  // segments only: no spool, no video
+    EXPECT_EQ(e.path().extension(), ".segment") << e.path();
+  SequenceMetadata meta(info.target, info.mastering);
+  for (std::size_t i = 0; i < frames.size(); ++i) ASSERT_TRUE(meta.add(frames[i], i == 0).ok());
+  meta.finish();
+  auto joined = SequenceWriter::join_segments(dir / "joined", s, info, segments, meta);
+  ASSERT_TRUE(joined.ok()) << joined.error().message;
+  EXPECT_EQ(joined->frames, 6);
+  const auto decoded = decode(joined->path);
+  ASSERT_EQ(decoded.size(), frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Reference ref = reference_planes(frames[i], Range::narrow);
+    EXPECT_EQ(decoded[i].y, ref.y) << "frame " << i;
+    EXPECT_EQ(decoded[i].cb, ref.cb) << "frame " << i;
+  }
+  if (have_ffprobe()) {
+    const auto probe = ffprobe(joined->path);
+    ASSERT_TRUE(probe.has_value());
+    ASSERT_EQ((*probe)["frames"].size(), 6u);
+    for (const auto& f : (*probe)["frames"])
+      EXPECT_TRUE(side_data(f, "HDR Dynamic Metadata SMPTE2094-40 (HDR10+)")) << "every frame";
+    EXPECT_EQ((*side_data((*probe)["frames"][0], "Content light level metadata"))["max_content"],
+              io::cta861_light(meta.content_light(), frames[0].mastering).max_cll);
+  }
+  // A segment of other settings is refused, naming it; nothing is left behind.
+  VideoSettings other = s;
+  other.lossless = false;
+  other.crf = 30;
+  auto w = SequenceWriter::open(dir / "other", other, info);
+  ASSERT_TRUE(w.ok());
+  ASSERT_TRUE((*w)->write(frames[0]).ok());
+  ASSERT_TRUE((*w)->finish_segment(dir / "other.segment").ok());
+  std::vector<fs::path> mixed = {segments[0], dir / "other.segment"};
+  SequenceMetadata meta2(info.target, info.mastering);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(meta2.add(frames[static_cast<std::size_t>(i)], i == 0).ok());
+  meta2.finish();
+  auto bad = SequenceWriter::join_segments(dir / "mixed", s, info, mixed, meta2);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, "video.segment");
+  EXPECT_NE(bad.error().message.find("segment 1 (other.segment)"), std::string::npos) << bad.error().message;
+  EXPECT_FALSE(fs::exists(dir / "mixed.mp4"));
+  std::ofstream(dir / "junk.segment") << "not a segment";
+  std::vector<fs::path> junk = {dir / "junk.segment"};
+  EXPECT_EQ(SequenceWriter::join_segments(dir / "j", s, info, junk, meta2).error().code, "video.segment");
+}
