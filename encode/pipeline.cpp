@@ -2,6 +2,8 @@
 // reference path, and the frame encoder that runs the staged fast path over rows.
 #include "encode/pipeline.hpp"
 
+#include "encode/parallel.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -400,12 +402,10 @@ std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits) 
                       color::kRec2020Luma.z * in.to_working.m[2][1],
                   color::kRec2020Luma.x * in.to_working.m[0][2] + color::kRec2020Luma.y * in.to_working.m[1][2] +
                       color::kRec2020Luma.z * in.to_working.m[2][2]};
-  std::vector<float> out;
-  out.reserve(n / step + 1);
-  for (std::size_t i = 0; i < n; i += step) {
-    const Vec3 v = input_pixel(in, i);
-    out.push_back(static_cast<float>(color::dot(luma, v) * unit_nits));
-  }
+  std::vector<float> out((n + step - 1) / step);
+  parallel_for(out.size(), 0, 1 << 16, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) out[k] = static_cast<float>(color::dot(luma, input_pixel(in, k * step)) * unit_nits);
+  });
   return out;
 }
 
@@ -473,15 +473,16 @@ Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSett
   const double unit_nits = in.units == InputUnits::absolute ? in.white_luminance_nits : t.paper_white_nits;
   exposure::Settings ex = s.exposure;
   if (!ex.illuminance_lux && in.illuminance_lux && *in.illuminance_lux > 0) ex.illuminance_lux = in.illuminance_lux;
-  std::vector<float> samples;
+  std::shared_ptr<std::vector<float>> samples;
   if (ex.mode == exposure::Mode::log_average || ex.mode == exposure::Mode::histogram)
-    samples = scene_luminance_nits(in, unit_nits);
-  auto m = exposure::meter(ex, samples, t.paper_white_nits);
+    samples = std::make_shared<std::vector<float>>(scene_luminance_nits(in, unit_nits));
+  auto m = exposure::meter(ex, samples ? std::span<const float>(*samples) : std::span<const float>(), t.paper_white_nits);
   if (!m) return m.error();
   p.metering = *m;
   p.settings.exposure = ex;
   p.input_to_working = in.to_working;
   p.unit_nits = unit_nits;
+  p.luminance_nits = std::move(samples);
   p.scene_scale = unit_nits * m->scale;
   return p;
 }

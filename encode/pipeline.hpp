@@ -82,6 +82,9 @@ struct PreparedPipeline {
   color::Mat3 input_to_working;            // includes nothing but primaries
   double scene_scale = 1.0;                // input value -> relative (exposure, units, compensation)
   double unit_nits = 1.0;                  // cd/m2 of input value 1.0 (absolute: white luminance; relative: paper white)
+  // The metered samples (scene_luminance_nits) when the exposure mode read the image;
+  // a sequence's temporal decisions reuse them.
+  std::shared_ptr<const std::vector<float>> luminance_nits;
   nlohmann::json describe() const;         // settings for the sidecar
 };
 

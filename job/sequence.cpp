@@ -531,8 +531,10 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path&
     JobOptions jo = options.job;
     jo.time_s = item.time_s;
     jo.temporal = [&](const SceneInput& in, PreparedPipeline& p) -> Result<void> {
-      const auto lum = scene_luminance_nits(in, p.unit_nits);
-      auto d = tone.next(lum, p.settings.exposure, p.settings.target.paper_white_nits, dt);
+      // The samples the exposure metered, when it read the image (the same ones, once).
+      std::shared_ptr<const std::vector<float>> lum = p.luminance_nits;
+      if (!lum) lum = std::make_shared<const std::vector<float>>(scene_luminance_nits(in, p.unit_nits));
+      auto d = tone.next_metered(*lum, p.metering.scale, dt);
       if (!d) return d.error();
       // Manual and camera exposure are what the request (or the scene's keyframes) says,
       // frame by frame: exactly each frame's single-frame encode. Metered modes adapt.

@@ -10,15 +10,20 @@ Result<void> validate(const TemporalSettings& s) {
 
 Result<FrameDecision> TemporalTone::next(std::span<const float> luminance_nits, const exposure::Settings& exposure,
                                          double paper_white_nits, double dt_s, bool given_cut) {
+  auto metering = exposure::meter(exposure, luminance_nits, paper_white_nits);
+  if (!metering) return metering.error();
+  return next_metered(luminance_nits, metering->scale, dt_s, given_cut);
+}
+
+Result<FrameDecision> TemporalTone::next_metered(std::span<const float> luminance_nits, double own_scale, double dt_s,
+                                                 bool given_cut) {
   FrameDecision d;
   const LuminanceHistogram histogram = LuminanceHistogram::of(luminance_nits);
   const bool detected = cuts_.next(histogram);
   d.cut_distance_stops = first_ ? 0.0 : cuts_.last_distance();  // nothing before the first frame
   d.scene_start = first_ || given_cut || (settings_.detect_cuts && detected);
   first_ = false;
-  auto metering = exposure::meter(exposure, luminance_nits, paper_white_nits);
-  if (!metering) return metering.error();
-  d.own_scale = metering->scale;
+  d.own_scale = own_scale;
   auto scale = adaptation_.next(d.own_scale, dt_s, d.scene_start);
   if (!scale) return scale.error();
   d.exposure_scale = *scale;

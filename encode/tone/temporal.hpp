@@ -40,6 +40,10 @@ class TemporalTone {
   // knows a scene starts here (keyframed scene change, a new input file).
   Result<FrameDecision> next(std::span<const float> luminance_nits, const exposure::Settings& exposure,
                              double paper_white_nits, double dt_s, bool given_cut = false);
+  // The same, when the caller has metered the frame already (own_scale: exposure::meter's
+  // scale on the same samples, e.g. PreparedPipeline::metering.scale).
+  Result<FrameDecision> next_metered(std::span<const float> luminance_nits, double own_scale, double dt_s,
+                                     bool given_cut = false);
 
  private:
   TemporalSettings settings_;

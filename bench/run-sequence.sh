@@ -1,0 +1,155 @@
+#!/usr/bin/env bash
+# Sequences, whole commands (docs/sequences.md "Performance"). Builds Release, makes panning
+# EXR sequences from ../shared/fixtures/exr/MtTamWest.exr with oiiotool (1080p and 4K, a
+# different picture every frame, as a camera pan), and measures:
+#   split     per-frame time of `hdrd encode 'pan.%03d.exr' --video hevc` by stage, from the
+#             sequence sidecar's timings_ms: read, meter+encode, Y'CbCr conversion, metadata,
+#             the video encoder's calls, the mux; and the process CPU (user + sys)
+#   own       the same command without video (--format raw into a scratch dir): hdrd's own
+#             work; the video encoder's CPU is the difference. Target: hdrd's own per-frame
+#             work outside rendering and the encoder (meter + encode + Y'CbCr + metadata)
+#             <= 10 % of the encoder's CPU at its default preset
+#   render    `hdrd render --scene hdr --frames N --video hevc` at 1080p: render per frame
+#   rss       resident memory of `hdrd encode` over 300 frames (640x360, --video hevc),
+#             sampled every 50 ms: the medians of the run's second and last sixths (after
+#             the encoder's warm-up) and the peak, and the peak of a 30-frame run (flat: RSS
+#             does not grow with frames)
+# Alternated (the video / no-video runs in a new random order each repetition), medians of
+# REPS. The last line is one JSON object.
+# env: BUILD_DIR (default build-release), REPS (default 3), SIZES (default "1080p 4k"),
+#      NO_BUILD=1 (time the build in BUILD_DIR as it is)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build_dir=${BUILD_DIR:-build-release}
+if [ "${NO_BUILD:-0}" != 1 ]; then
+  bash scripts/install-deps.sh >/dev/null
+  launcher=(); command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DHDRD_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
+  ninja -C "$build_dir" -j "${JOBS:-$(nproc)}" hdrd >/dev/null
+fi
+build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
+command -v oiiotool >/dev/null || { echo "run-sequence: oiiotool missing (apt-get install openimageio-tools)" >&2; exit 1; }
+
+shared=${HDRD_SHARED_DIR:-../shared}
+src="$shared/fixtures/exr/MtTamWest.exr"
+[ -f "$src" ] || { echo "run-sequence: $src missing (set HDRD_SHARED_DIR)" >&2; exit 1; }
+work="$build_dir/bench-sequence"
+mkdir -p "$work"
+# pan NAME W H FRAMES: crops of a 1.25x enlargement, moving right by W/100 per frame.
+pan() {
+  local name=$1 w=$2 h=$3 n=$4 dir="$work/$1"
+  [ -f "$dir/pan.$(printf %03d $((n - 1))).exr" ] && return
+  mkdir -p "$dir"
+  local bw=$((w * 5 / 4)) bh=$((h * 5 / 4))
+  oiiotool "$src" --ch R,G,B --resize "${bw}x${bh}" -d half -o "$dir/big.exr"
+  for ((i = 0; i < n; ++i)); do
+    oiiotool "$dir/big.exr" --cut "${w}x${h}+$((i * w / 100))+$((h / 8))" -d half --compression zip \
+      -o "$dir/pan.$(printf %03d "$i").exr"
+  done
+}
+pan 1080p 1920 1080 24
+pan 4k 3840 2160 12
+pan small 640 360 100
+
+exec python3 - "$build_dir" "$work" "${REPS:-3}" "${SIZES:-1080p 4k}" "$build_type" <<'PY'
+import json, os, random, shutil, statistics, subprocess, sys, tempfile, time
+
+build, work, reps, sizes, build_type = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4].split(), sys.argv[5]
+hdrd = os.path.join(build, "tools", "hdrd")
+scratch = tempfile.mkdtemp(prefix="hdrd-bench-seq-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None)
+
+def run(args):
+    """Runs hdrd; returns (wall s, cpu s of the child, parsed --json stdout)."""
+    before = os.times()
+    t0 = time.monotonic()
+    p = subprocess.run([hdrd] + args + ["--json", "-q"], capture_output=True, text=True)
+    wall = time.monotonic() - t0
+    after = os.times()
+    if p.returncode != 0:
+        sys.exit(f"run-sequence: hdrd {' '.join(args)} failed: {p.stderr.strip()}")
+    cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    return wall, cpu, json.loads(p.stdout)
+
+def med(xs):
+    return statistics.median(xs) if xs else None
+
+result = {"build_type": build_type, "reps": reps, "sizes": {}}
+for size in sizes:
+    pattern = os.path.join(work, size, "pan.%03d.exr")
+    frames = len([f for f in os.listdir(os.path.join(work, size)) if f.startswith("pan.")])
+    runs = {"video": [], "own": []}
+    for _ in range(reps):
+        order = ["video", "own"]
+        random.shuffle(order)
+        for case in order:
+            out = os.path.join(scratch, f"{size}-{case}")
+            args = ["encode", pattern, "-o", out] + (["--video", "hevc"] if case == "video" else ["--format", "raw"])
+            runs[case].append(run(args))
+            for f in os.listdir(scratch):
+                os.remove(os.path.join(scratch, f))
+    per = lambda case, key: med([r[2]["timings_ms"].get(key, 0.0) / frames for r in runs[case]])
+    split = {k: per("video", k) for k in ["read", "encode", "video_ycbcr", "metadata", "video_encoder", "video_mux", "video"]}
+    cpu_video = med([r[1] / frames * 1e3 for r in runs["video"]])
+    cpu_own = med([r[1] / frames * 1e3 for r in runs["own"]])
+    encoder_cpu = cpu_video - cpu_own - split["video_ycbcr"] - split["metadata"]
+    # hdrd's own work outside reading and the encoder, in CPU ms: meter + tone map + encode
+    # (its CPU in the run without video, where nothing runs beside it), Y'CbCr and the metadata
+    # (one thread each: their wall time, an upper bound on a loaded machine).
+    own_work = per("own", "encode_cpu") + split["video_ycbcr"] + split["metadata"]
+    split["encode_cpu_without_video"] = per("own", "encode_cpu")
+    split["read_cpu_without_video"] = per("own", "read_cpu")
+    result["sizes"][size] = {
+        "frames": frames,
+        "wall_ms_per_frame": {"video": med([r[0] / frames * 1e3 for r in runs["video"]]),
+                              "no_video": med([r[0] / frames * 1e3 for r in runs["own"]])},
+        "split_ms_per_frame": split,
+        "cpu_ms_per_frame": {"with_video": cpu_video, "without_video": cpu_own, "video_encoder": encoder_cpu},
+        "own_work_ms_per_frame": own_work,
+        "own_over_encoder": own_work / encoder_cpu if encoder_cpu > 0 else None,
+        "own_with_read_over_encoder": (own_work + split["read_cpu_without_video"]) / encoder_cpu if encoder_cpu > 0 else None,
+    }
+
+# A render sequence at 1080p: where a rendered frame's time goes.
+w, c, j = run(["render", "--scene", "hdr", "--frames", "4", "--width", "1920", "--height", "1080", "--video", "hevc",
+               "-o", os.path.join(scratch, "render")])
+n = j["frame_count"]
+result["render_1080p_ms_per_frame"] = {k: v / n for k, v in j["timings_ms"].items() if isinstance(v, (int, float))}
+result["render_1080p_ms_per_frame"]["wall"] = w / n * 1e3
+for f in os.listdir(scratch):
+    os.remove(os.path.join(scratch, f))
+
+# Resident memory over 300 frames (a list file cycling the 100 small frames) vs 30 frames.
+def rss_run(count):
+    lst = os.path.join(scratch, f"list{count}.txt")
+    small = os.path.join(work, "small")
+    with open(lst, "w") as f:
+        for i in range(count):
+            f.write(os.path.join(os.path.abspath(small), "pan.%03d.exr" % (i % 100)) + "\n")
+    p = subprocess.Popen([hdrd, "encode", lst, "--video", "hevc", "-o", os.path.join(scratch, f"rss{count}"), "-q"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    samples = []
+    while p.poll() is None:
+        try:
+            with open(f"/proc/{p.pid}/status") as s:
+                for line in s:
+                    if line.startswith("VmRSS:"):
+                        samples.append(int(line.split()[1]) / 1024)
+        except FileNotFoundError:
+            pass
+        time.sleep(0.05)
+    if p.returncode != 0:
+        sys.exit("run-sequence: rss run failed: " + p.stderr.read().decode())
+    return samples
+
+# The encoder fills its lookahead and frame threads over the first frames: compare the
+# second sixth of the run (frames ~50-100, after that warm-up) with the last (250-300).
+s300, s30 = rss_run(300), rss_run(30)
+k = max(1, len(s300) // 6)
+result["rss_mb"] = {"300_frames": {"second_sixth_median": med(s300[k:2 * k]), "last_sixth_median": med(s300[-k:]),
+                                   "peak": max(s300)},
+                    "30_frames_peak": max(s30)}
+result["rss_mb"]["growth_last_over_second_sixth"] = result["rss_mb"]["300_frames"]["last_sixth_median"] / \
+    result["rss_mb"]["300_frames"]["second_sixth_median"]
+shutil.rmtree(scratch, ignore_errors=True)
+print(json.dumps(result))
+PY
