@@ -159,6 +159,18 @@ bool sets_sequence_settings(const nlohmann::json& request) {
 
 namespace {
 
+Result<std::string> read_text(const fs::path& p, std::uintmax_t max_bytes = 1u << 30) {
+  std::error_code ec;
+  const auto size = fs::file_size(p, ec);
+  if (ec) return make_error("io.read", fmt::format("cannot read {}: {}", p.string(), ec.message()));
+  if (size > max_bytes) return make_error("io.read", fmt::format("{} is larger than {} bytes", p.string(), max_bytes));
+  std::ifstream in(p, std::ios::binary);
+  std::string text(static_cast<std::size_t>(size), '\0');
+  if (!in.read(text.data(), static_cast<std::streamsize>(size)))
+    return make_error("io.read", fmt::format("cannot read {}", p.string()));
+  return text;
+}
+
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -170,7 +182,13 @@ std::pair<int, int> rational_fps(double fps) {
   return {static_cast<int>(std::round(fps * 1000)), 1000};
 }
 
-Result<video::VideoSettings> video_settings(const FrameRequest& r, double fps) {
+Result<std::optional<video::VideoSettings>> video_settings(const FrameRequest& r) {
+  if (r.is_null("video.codec")) {
+    // Read so that the "every setting is used" check sees them: they only matter with a codec.
+    for (const auto& s : settings())
+      if (s.path.rfind("video.", 0) == 0) r.at(s.path);
+    return std::optional<video::VideoSettings>();
+  }
   video::VideoSettings v;
   v.codec = video::parse_codec(r.text("video.codec")).value_or(video::Codec::hevc);
   v.container = video::parse_container(r.text("video.container")).value_or(video::Container::mp4);
@@ -178,13 +196,20 @@ Result<video::VideoSettings> video_settings(const FrameRequest& r, double fps) {
   v.preset = r.text("video.preset");
   v.lossless = r.boolean("video.lossless");
   v.range = parse_range(r.text("video.range")).value_or(Range::narrow);
-  std::tie(v.fps_num, v.fps_den) = rational_fps(fps);
+  std::tie(v.fps_num, v.fps_den) = rational_fps(r.number("fps"));
   v.keyframe_interval_s = r.number("video.keyframe_interval_s");
   v.threads = static_cast<int>(r.integer("video.threads"));
   v.av1_encoder = r.text("video.av1_encoder");
   v.dynamic_metadata = r.boolean("video.dynamic_metadata");
   if (auto ok = video::validate(v); !ok) return ok.error();
-  return v;
+  return std::optional<video::VideoSettings>(v);
+}
+
+video::SequenceMetadataSettings metadata_settings(const FrameRequest& r) {
+  video::SequenceMetadataSettings s;
+  s.granularity = video::parse_granularity(r.text("metadata.granularity")).value_or(s.granularity);
+  s.hdr10plus_target_nits = r.optional_number("metadata.hdr10plus_target_nits");
+  return s;
 }
 
 temporal::TemporalSettings temporal_settings(const FrameRequest& r) {
@@ -256,7 +281,138 @@ struct FrameItem {
 
 std::string frame_base(const fs::path& outbase, int index) { return fmt::format("{}.{:05d}", outbase.string(), index); }
 
-// The writer stage: per-frame dumps, the video encoder, the metadata, live output.
+// The sidecar entry of one frame.
+nlohmann::json frame_entry(const FrameItem& item, int scene) {
+  const EncodedFrame& f = item.result.frame;
+  nlohmann::json entry = {{"index", item.index},
+                          {"time_s", item.time_s},
+                          {"scene", scene},
+                          {"scene_start", item.decision.scene_start},
+                          {"exposure_scale", f.settings.contains("exposure") ? f.settings["exposure"].value("scale", 0.0)
+                                                                            : item.decision.exposure_scale},
+                          {"metered_exposure_scale", item.decision.own_scale},
+                          {"cut_distance_stops", item.decision.cut_distance_stops},
+                          {"max_cll_nits", f.content_light.max_cll_nits},
+                          {"frame_average_nits", f.content_light.max_fall_nits}};
+  if (item.source_peak_nits) entry["source_peak_nits"] = *item.source_peak_nits;
+  if (!item.input.empty()) entry["input"] = item.input;
+  return entry;
+}
+
+// What the writer stage knows at the end, for the sequence's outputs.
+struct SequenceSummary {
+  nlohmann::json first_sidecar;           // io::sidecar_json of frame 0: the target and signal fields
+  nlohmann::json frames = nlohmann::json::array();
+  std::vector<std::string> frame_kinds;  // per-frame dump kinds ("raw", "sidecar", ...)
+  std::vector<std::string> warnings;
+  nlohmann::json timings = nlohmann::json::object();
+};
+
+// OUTBASE.json, OUTBASE.hdr10plus.json and OUTBASE.dovi.json (hdr10), all or nothing. The
+// one composition of the sequence's outputs: a one-process run and a merge of shards.
+Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const fs::path& outbase, double fps,
+                                              const SequenceSummary& sum, const video::SequenceMetadata& metadata,
+                                              const std::optional<video::VideoResult>& video) {
+  SequenceResult out;
+  nlohmann::json j = sum.first_sidecar;
+  j["format"] = "hdrd-sequence";
+  j["format_version"] = 1;
+  j["fps"] = fps;
+  j["frame_count"] = sum.frames.size();
+  j["duration_s"] = sum.frames.size() / fps;
+  j["frames"] = sum.frames;
+  nlohmann::json scenes = nlohmann::json::array();
+  for (const auto& s : metadata.scenes()) scenes.push_back({{"first_frame", s.first_frame}, {"last_frame", s.last_frame}});
+  j["scenes"] = scenes;
+  // CTA-861.3 over the whole sequence: the largest pixel and the largest frame average.
+  const ContentLightLevel measured = metadata.content_light();
+  const bool hdr = j.value("mode", "") == "hdr10" || j.value("mode", "") == "hlg" || j.value("mode", "") == "scrgb";
+  const CarriedLightLevel carried = hdr ? carried_light_level(measured, metadata.mastering()) : CarriedLightLevel{};
+  j["content_light_level"] = {{"max_cll_nits", carried.max_cll_nits},
+                              {"max_fall_nits", carried.max_fall_nits},
+                              {"max_cll_nits_measured", measured.max_cll_nits},
+                              {"max_fall_nits_measured", measured.max_fall_nits}};
+  j.erase("settings");
+  j["settings"] = {{"request", request.canonical()}};
+  j["warnings"] = sum.warnings;
+  nlohmann::json files = nlohmann::json::object();
+  const std::string stem = outbase.filename().string();
+  for (const auto& kind : sum.frame_kinds) {
+    const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+    files["frames"][kind] = fmt::format("{}.%05d{}", stem, ext);
+    out.files["frames." + kind] = fmt::format("{}.%05d{}", outbase.string(), ext);
+  }
+  std::vector<std::string> texts;
+  std::vector<fs::path> paths;
+  auto add = [&](const std::string& kind, const std::string& suffix, std::string text) {
+    paths.push_back(outbase.string() + suffix);
+    texts.push_back(std::move(text));
+    files[kind] = paths.back().filename().string();
+    out.files[kind] = paths.back().string();
+  };
+  if (metadata.has_dynamic_metadata()) {
+    add("hdr10plus", ".hdr10plus.json", metadata.hdr10plus_json().dump(2) + "\n");
+    add("dovi", ".dovi.json", metadata.dovi_json().dump(2) + "\n");
+  }
+  nlohmann::json timings = sum.timings;
+  if (video) {
+    timings["video_ycbcr"] = video->convert_ms;
+    timings["video_encoder"] = video->encoder_ms;
+    timings["video_mux"] = video->mux_ms;
+    nlohmann::json vj = video->to_json();
+    vj["file"] = video->path.filename().string();
+    j["video"] = vj;
+    files["video"] = video->path.filename().string();
+    out.files["video"] = video->path.string();
+  }
+  const fs::path sidecar = outbase.string() + ".json";
+  files["sidecar"] = sidecar.filename().string();
+  j["files"] = files;
+  j["timings_ms"] = timings;
+  paths.push_back(sidecar);
+  texts.push_back(j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  std::vector<io::FileToWrite> writes;
+  for (std::size_t i = 0; i < paths.size(); ++i)
+    writes.push_back({paths[i], std::span(reinterpret_cast<const std::uint8_t*>(texts[i].data()), texts[i].size())});
+  if (auto ok = io::write_all_or_nothing(writes, {.durable = request.boolean("durable")}); !ok) return ok.error();
+  out.files["sidecar"] = sidecar.string();
+  out.sidecar = std::move(j);
+  out.frames = static_cast<int>(sum.frames.size());
+  out.warnings = sum.warnings;
+  out.timings_ms = std::move(timings);
+  return out;
+}
+
+nlohmann::json light_json(const FrameLight& l) {
+  nlohmann::json counts = nlohmann::json::object();  // sparse: hdr10 fills at most 1024 levels
+  for (std::size_t i = 0; i < l.pq_counts.size(); ++i)
+    if (l.pq_counts[i]) counts[std::to_string(i)] = l.pq_counts[i];
+  return {{"max_channel_nits", l.max_channel_nits}, {"max_nits", l.max_nits}, {"mean_nits", l.mean_nits},
+          {"min_nits", l.min_nits}, {"pixels", l.pixels}, {"pq_counts", counts}};
+}
+
+Result<FrameLight> light_from_json(const nlohmann::json& j) {
+  try {
+    FrameLight l;
+    l.max_channel_nits = j.at("max_channel_nits").get<std::array<double, 3>>();
+    l.max_nits = j.at("max_nits").get<double>();
+    l.mean_nits = j.at("mean_nits").get<double>();
+    l.min_nits = j.at("min_nits").get<double>();
+    l.pixels = j.at("pixels").get<std::uint64_t>();
+    for (const auto& [k, v] : j.at("pq_counts").items()) {
+      const std::size_t bin = std::stoul(k);
+      if (bin >= l.pq_counts.size()) return make_error("sequence.shard", "a light level outside the 12-bit PQ range");
+      l.pq_counts[bin] = v.get<std::uint32_t>();
+    }
+    return l;
+  } catch (const std::exception& e) {
+    return make_error("sequence.shard", std::string("a frame's light is malformed: ") + e.what());
+  }
+}
+
+// The writer stage: per-frame dumps, the video encoder, the metadata, live output. In a
+// shard (SequenceOptions::shard) it writes a video segment and the frames' statistics into
+// the work dir instead of the sequence's outputs (job/sequence_plan.cpp merges them).
 class SequenceSink {
  public:
   SequenceSink(const FrameRequest& r, const fs::path& outbase, const SequenceOptions& options,
@@ -270,56 +426,47 @@ class SequenceSink {
     const auto t0 = Clock::now();
     const EncodedFrame& f = item.result.frame;
     if (!metadata_) {
-      metadata_.emplace(f.target, f.mastering, metadata_settings());
-      first_sidecar_ = io::sidecar_json(f, {});
-      target_ = f.target;
+      metadata_.emplace(f.target, f.mastering, metadata_settings(request_));
+      sum_.first_sidecar = io::sidecar_json(f, {});
       if (video_settings_) {
-        auto w = video::SequenceWriter::open(outbase_, *video_settings_, {f.width, f.height, f.target, f.mastering});
+        auto w = video::SequenceWriter::open(video_base(), *video_settings_, {f.width, f.height, f.target, f.mastering});
         if (!w) return w.error();
         writer_ = std::move(*w);
       }
     }
     if (!item.result.files.empty()) {
-      auto written = write_outputs(item.result, frame_base(outbase_, item.index));
+      auto written = write_outputs(item.result, frame_base(dumps_base(), item.index));
       if (!written) return written.error();
+      const bool first = sum_.frames.empty();
       for (const auto& [kind, path] : *written) {
         written_.push_back(path);
-        if (item.index == 0) frame_kinds_.push_back(kind);
+        if (first) sum_.frame_kinds.push_back(kind);
       }
     }
-    timings_["dumps"] = timings_.value("dumps", 0.0) + seconds_since(t0) * 1e3;
+    add_time("dumps", t0);
     const bool start = item.decision.scene_start;
     const auto t1 = Clock::now();
-    if (auto ok = metadata_->add(f, start); !ok) return ok.error();
-    timings_["metadata"] = timings_.value("metadata", 0.0) + seconds_since(t1) * 1e3;
+    const FrameLight light = metadata_->light_of(f);
+    if (auto ok = metadata_->add(light, start); !ok) return ok.error();
+    if (options_.shard) lights_.push_back(light_json(light));
+    add_time("metadata", t1);
     if (writer_) {
       const auto t2 = Clock::now();
       if (auto ok = writer_->write(f, {.keyframe = start}); !ok) return ok.error();
-      timings_["video"] = timings_.value("video", 0.0) + seconds_since(t2) * 1e3;
+      add_time("video", t2);
     }
     if (options_.on_frame)
       if (auto ok = options_.on_frame(f, item.index); !ok) return ok.error();
-    scenes_ += start ? 1 : 0;
-    nlohmann::json entry = {{"index", item.index},
-                            {"time_s", item.time_s},
-                            {"scene", scenes_ - 1},
-                            {"scene_start", start},
-                            {"exposure_scale", f.settings.contains("exposure") ? f.settings["exposure"].value("scale", 0.0)
-                                                                              : item.decision.exposure_scale},
-                            {"metered_exposure_scale", item.decision.own_scale},
-                            {"cut_distance_stops", item.decision.cut_distance_stops},
-                            {"max_cll_nits", f.content_light.max_cll_nits},
-                            {"frame_average_nits", f.content_light.max_fall_nits}};
-    if (item.source_peak_nits) entry["source_peak_nits"] = *item.source_peak_nits;
-    if (!item.input.empty()) entry["input"] = item.input;
-    frames_.push_back(std::move(entry));
+    // Scenes are numbered over the whole sequence: a shard counts the ones before it.
+    scene_ = start ? scene_ + 1 : scene_;
+    sum_.frames.push_back(frame_entry(item, scene_));
     for (const auto& w : item.result.warnings)
-      if (std::find(warnings_.begin(), warnings_.end(), w) == warnings_.end()) warnings_.push_back(w);
+      if (std::find(sum_.warnings.begin(), sum_.warnings.end(), w) == sum_.warnings.end()) sum_.warnings.push_back(w);
     for (const auto& [stage, ms] : item.result.timings_ms.items())
-      if (ms.is_number()) timings_[stage] = timings_.value(stage, 0.0) + ms.get<double>();
+      if (ms.is_number()) sum_.timings[stage] = sum_.timings.value(stage, 0.0) + ms.get<double>();
     if (options_.progress) {
       SequenceProgress p;
-      p.frames_done = static_cast<int>(frames_.size());
+      p.frames_done = static_cast<int>(sum_.frames.size());
       p.frames_total = total_;
       p.elapsed_s = seconds_since(start_);
       p.fps = p.elapsed_s > 0 ? p.frames_done / p.elapsed_s : 0;
@@ -329,90 +476,78 @@ class SequenceSink {
     return {};
   }
 
+  // A shard's scene numbers continue the sequence's: `scenes` started before its first frame.
+  void set_scenes_before(int scenes) { scene_ = scenes - 1; }
+
   Result<SequenceResult> finish(double fps) {
     if (!metadata_) return make_error("internal", "a sequence finished without frames");
+    if (options_.shard) return finish_shard();
     metadata_->finish();
-    SequenceResult out;
-    nlohmann::json j = first_sidecar_;
-    j["format"] = "hdrd-sequence";
-    j["format_version"] = 1;
-    j["fps"] = fps;
-    j["frame_count"] = frames_.size();
-    j["duration_s"] = frames_.size() / fps;
-    j["frames"] = frames_;
-    nlohmann::json scenes = nlohmann::json::array();
-    for (const auto& s : metadata_->scenes()) scenes.push_back({{"first_frame", s.first_frame}, {"last_frame", s.last_frame}});
-    j["scenes"] = scenes;
-    // CTA-861.3 over the whole sequence: the largest pixel and the largest frame average.
-    const ContentLightLevel measured = metadata_->content_light();
-    const CarriedLightLevel carried =
-        target_.is_hdr() ? carried_light_level(measured, metadata_->mastering()) : CarriedLightLevel{};
-    j["content_light_level"] = {{"max_cll_nits", carried.max_cll_nits},
-                                {"max_fall_nits", carried.max_fall_nits},
-                                {"max_cll_nits_measured", measured.max_cll_nits},
-                                {"max_fall_nits_measured", measured.max_fall_nits}};
-    j.erase("settings");
-    j["settings"] = {{"request", request_.canonical()}};
-    j["warnings"] = warnings_;
-    nlohmann::json files = nlohmann::json::object();
-    const std::string stem = outbase_.filename().string();
-    for (const auto& kind : frame_kinds_) {
-      const std::string ext = kind == "sidecar" ? ".json" : std::string(output_info(find_output(kind)->id).suffix);
-      files["frames"][kind] = fmt::format("{}.%05d{}", stem, ext);
-      out.files["frames." + kind] = fmt::format("{}.%05d{}", outbase_.string(), ext);
-    }
-    std::vector<std::string> texts;
-    std::vector<fs::path> paths;
-    if (metadata_->has_dynamic_metadata()) {
-      paths.push_back(outbase_.string() + ".hdr10plus.json");
-      texts.push_back(metadata_->hdr10plus_json().dump(2) + "\n");
-      files["hdr10plus"] = paths.back().filename().string();
-      out.files["hdr10plus"] = paths.back().string();
-      paths.push_back(outbase_.string() + ".dovi.json");
-      texts.push_back(metadata_->dovi_json().dump(2) + "\n");
-      files["dovi"] = paths.back().filename().string();
-      out.files["dovi"] = paths.back().string();
-    }
+    std::optional<video::VideoResult> video;
     if (writer_) {
       const auto t0 = Clock::now();
       auto v = writer_->finish(&*metadata_);
       if (!v) return v.error();
-      timings_["video"] = timings_.value("video", 0.0) + seconds_since(t0) * 1e3;
-      timings_["video_ycbcr"] = v->convert_ms;
-      timings_["video_encoder"] = v->encoder_ms;
-      timings_["video_mux"] = v->mux_ms;
+      add_time("video", t0);
       written_.push_back(v->path.string());
-      nlohmann::json vj = v->to_json();
-      vj["file"] = v->path.filename().string();
-      j["video"] = vj;
-      files["video"] = v->path.filename().string();
-      out.files["video"] = v->path.string();
+      video = std::move(*v);
     }
-    const fs::path sidecar = outbase_.string() + ".json";
-    files["sidecar"] = sidecar.filename().string();
-    j["files"] = files;
-    j["timings_ms"] = timings_;
-    paths.push_back(sidecar);
-    texts.push_back(j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-    std::vector<io::FileToWrite> writes;
-    for (std::size_t i = 0; i < paths.size(); ++i)
-      writes.push_back({paths[i], std::span(reinterpret_cast<const std::uint8_t*>(texts[i].data()), texts[i].size())});
-    if (auto ok = io::write_all_or_nothing(writes, {.durable = request_.boolean("durable")}); !ok) return ok.error();
-    out.files["sidecar"] = sidecar.string();
-    out.sidecar = std::move(j);
-    out.frames = static_cast<int>(frames_.size());
-    out.warnings = warnings_;
-    out.timings_ms = timings_;
+    auto out = write_sequence_outputs(request_, outbase_, fps, sum_, *metadata_, video);
+    if (!out) return out.error();
     finished_ = true;
     return out;
   }
 
  private:
-  video::SequenceMetadataSettings metadata_settings() const {
-    video::SequenceMetadataSettings s;
-    s.granularity = video::parse_granularity(request_.text("metadata.granularity")).value_or(s.granularity);
-    s.hdr10plus_target_nits = request_.optional_number("metadata.hdr10plus_target_nits");
-    return s;
+  // A shard: the segment, then its statistics, then shard-I.done last (what the engines and
+  // the merge look for). No times in them: a retried shard writes the same bytes.
+  Result<SequenceResult> finish_shard() {
+    const ShardSpec& sh = *options_.shard;
+    const fs::path base = sh.work_dir / fmt::format("shard-{}", sh.shard);
+    if (writer_)
+      if (auto ok = writer_->finish_segment(base.string() + ".segment"); !ok) return ok.error();
+    written_.push_back(base.string() + ".segment");
+    nlohmann::json stats = {{"format", "hdrd-sequence-shard"},
+                            {"format_version", 1},
+                            {"fingerprint", sh.fingerprint},
+                            {"shard", sh.shard},
+                            {"first_frame", sh.first_frame},
+                            {"frame_count", sum_.frames.size()},
+                            {"first_sidecar", sum_.first_sidecar},
+                            {"frames", sum_.frames},
+                            {"lights", lights_},
+                            {"frame_kinds", sum_.frame_kinds},
+                            {"warnings", sum_.warnings},
+                            {"segment", writer_ ? nlohmann::json(base.filename().string() + ".segment") : nlohmann::json()}};
+    const std::string text = stats.dump(1) + "\n", done = sh.fingerprint + "\n";
+    const fs::path stats_path = base.string() + ".json", done_path = sh.work_dir / fmt::format("shard-{}.done", sh.shard);
+    if (auto ok = io::atomic_write(stats_path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()),
+                                   {.durable = true});
+        !ok)
+      return ok.error();
+    written_.push_back(stats_path.string());
+    if (auto ok = io::atomic_write(done_path, std::span(reinterpret_cast<const std::uint8_t*>(done.data()), done.size()),
+                                   {.durable = true});
+        !ok)
+      return ok.error();
+    SequenceResult out;
+    out.sidecar = std::move(stats);
+    out.frames = static_cast<int>(sum_.frames.size());
+    out.files = {{"stats", stats_path.string()}, {"done", done_path.string()}};
+    if (writer_) out.files["segment"] = base.string() + ".segment";
+    out.warnings = sum_.warnings;
+    out.timings_ms = sum_.timings;
+    finished_ = true;
+    return out;
+  }
+
+  // Where a shard puts what the merge will move: the work dir.
+  fs::path dumps_base() const { return options_.shard ? options_.shard->work_dir / "frames" / "frame" : outbase_; }
+  fs::path video_base() const {
+    return options_.shard ? options_.shard->work_dir / fmt::format("shard-{}", options_.shard->shard) : outbase_;
+  }
+  void add_time(const char* stage, Clock::time_point t0) {
+    sum_.timings[stage] = sum_.timings.value(stage, 0.0) + seconds_since(t0) * 1e3;
   }
   void remove_written() {
     if (writer_) writer_->cancel();
@@ -428,12 +563,10 @@ class SequenceSink {
   Clock::time_point start_ = Clock::now();
   std::optional<video::SequenceMetadata> metadata_;
   std::unique_ptr<video::SequenceWriter> writer_;
-  DisplayTarget target_;
-  nlohmann::json first_sidecar_;
-  nlohmann::json frames_ = nlohmann::json::array();
-  std::vector<std::string> frame_kinds_, written_, warnings_;
-  nlohmann::json timings_ = nlohmann::json::object();
-  int scenes_ = 0;
+  SequenceSummary sum_;
+  nlohmann::json lights_ = nlohmann::json::array();
+  std::vector<std::string> written_;
+  int scene_ = -1;
   bool finished_ = false;
 };
 
@@ -445,42 +578,161 @@ Result<std::vector<Output>> frame_outputs(const FrameRequest& r, Mode mode, bool
   return default_outputs(r.source, mode);
 }
 
-}  // namespace
+// Where the frames come from: a render's times or an encode's files.
+struct FrameSource {
+  int total = 1;
+  double fps = 24, start_s = 0;
+  std::vector<fs::path> inputs;  // encode
+};
 
-Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path& outbase, const SequenceOptions& options,
-                                    shading::Renderer* renderer) {
+Result<FrameSource> frame_source(const FrameRequest& request) {
+  if (!request.sequence) return make_error("internal", "run_sequence needs a request parsed as a sequence");
   if (request.source == Source::pattern) return make_error("request.value", "patterns have no sequence form", "frames");
-  if (outbase.empty() || !outbase.has_filename())
-    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
-  const double fps = request.number("fps");
-  const double dt = 1.0 / fps;
-  std::optional<video::VideoSettings> video;
-  if (!request.is_null("video.codec")) {
-    auto v = video_settings(request, fps);
-    if (!v) return v.error();
-    video = *v;
-  } else {
-    // Read so that the "every setting is used" check sees them: they only matter with a codec.
-    for (const auto& s : settings())
-      if (s.path.rfind("video.", 0) == 0) request.at(s.path);
-  }
-  const temporal::TemporalSettings ts = temporal_settings(request);
-  if (auto ok = temporal::validate(ts); !ok) return ok.error();
-
-  std::vector<fs::path> inputs;
-  int total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
+  FrameSource src;
+  src.fps = request.number("fps");
+  src.total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
   if (request.source == Source::encode) {
     auto files = exr_sequence_files(request.text("images"));
     if (!files) return files.error();
-    if (!request.is_null("frames") && total > static_cast<int>(files->size()))
+    if (!request.is_null("frames") && src.total > static_cast<int>(files->size()))
       return make_error("request.value",
-                        fmt::format("frames: {} asked, {} has {}", total, request.text("images"), files->size()),
+                        fmt::format("frames: {} asked, {} has {}", src.total, request.text("images"), files->size()),
                         "frames");
-    if (request.is_null("frames")) total = static_cast<int>(files->size());
-    files->resize(total);
-    inputs = std::move(*files);
+    if (request.is_null("frames")) src.total = static_cast<int>(files->size());
+    files->resize(static_cast<std::size_t>(src.total));
+    src.inputs = std::move(*files);
+  } else {
+    src.start_s = request.number("start_s");
   }
-  const double start_s = request.source == Source::render ? request.number("start_s") : 0.0;
+  return src;
+}
+
+// A sentinel: the analysis stops a frame job once the frame is decided.
+constexpr const char* kAnalysed = "sequence.analysed";
+
+// Runs frames [first, first + count) of the sequence: each frame's job, its decision (in
+// line from `tone`, or from the track), then `consume` (the writer stage, on its thread,
+// through the bounded queue) unless analysing.
+struct FrameLoop {
+  const FrameRequest& request;
+  const SequenceOptions& options;
+  const FrameSource& src;
+  shading::Renderer* renderer;
+  temporal::TemporalTone* tone = nullptr;                      // in line
+  const std::vector<temporal::FrameDecision>* track = nullptr;  // decided before (a plan)
+  std::vector<temporal::FrameDecision>* decided = nullptr;      // analysis: the decisions
+};
+
+Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in, PreparedPipeline& p) {
+  temporal::FrameDecision d;
+  if (loop.track) {
+    d = (*loop.track)[static_cast<std::size_t>(item.index)];
+  } else {
+    // The samples the exposure metered, when it read the image (the same ones, once).
+    std::shared_ptr<const std::vector<float>> lum = p.luminance_nits;
+    if (!lum) lum = std::make_shared<const std::vector<float>>(scene_luminance_nits(in, p.unit_nits));
+    auto next = loop.tone->next_metered(*lum, p.metering.scale, 1.0 / loop.src.fps);
+    if (!next) return next.error();
+    d = *next;
+  }
+  // Manual and camera exposure are what the request (or the scene's keyframes) says, frame
+  // by frame: exactly each frame's single-frame encode. Metered modes adapt.
+  const auto mode = p.settings.exposure.mode;
+  if (mode != exposure::Mode::manual && mode != exposure::Mode::camera) set_exposure_scale(p, d.exposure_scale);
+  const std::string_view param = p.curve_info ? source_peak_param(*p.curve_info) : std::string_view();
+  if (loop.request.boolean("tone.dynamic_peak") && !param.empty() &&
+      !loop.request.at("tone.params").contains(std::string(param))) {
+    if (auto ok = set_source_peak(p, d.source_peak); !ok) return ok.error();
+    item.source_peak_nits = d.source_peak * p.settings.target.paper_white_nits;
+  }
+  item.decision = d;
+  if (loop.decided) {
+    loop.decided->push_back(d);
+    return make_error(kAnalysed, "analysed");
+  }
+  return {};
+}
+
+template <class Sink>
+Result<void> run_frames(const FrameLoop& loop, int first, int count, std::optional<std::vector<Output>> outputs,
+                        Sink&& start_sink, BoundedQueue<FrameItem>& queue, const std::function<bool()>& failed,
+                        const std::function<void(Error)>& fail) {
+  const double dt = 1.0 / loop.src.fps;
+  for (int i = first; i < first + count && !failed(); ++i) {
+    if (loop.options.job.should_stop && loop.options.job.should_stop()) return make_error("request.cancelled", "cancelled");
+    FrameItem item;
+    item.index = i;
+    item.time_s = loop.src.start_s + i * dt;
+    JobOptions jo = loop.options.job;
+    jo.time_s = item.time_s;
+    jo.temporal = [&](const SceneInput& in, PreparedPipeline& p) { return decide(loop, item, in, p); };
+    EncodeInput input;
+    if (loop.request.source == Source::encode) {
+      input.path = loop.src.inputs[static_cast<std::size_t>(i)];
+      item.input = input.path.filename().string();
+    }
+    const std::string where = loop.request.source == Source::encode ? fmt::format("frame {} ({}): ", i, item.input)
+                                                                     : fmt::format("frame {} (t = {:g} s): ", i, item.time_s);
+    auto job = FrameJob::create(loop.request, std::move(jo), input, outputs);
+    if (!job) return job.error();
+    if (!outputs) {
+      auto o = frame_outputs(loop.request, (*job)->target().mode, !loop.request.is_null("video.codec"));
+      if (!o) return o.error();
+      outputs = *o;
+      if (auto ok = (*job)->set_outputs(*outputs); !ok) return ok.error();
+      start_sink();
+    }
+    auto result = run_frame_job(**job, loop.renderer);
+    if (!result && result.error().code == kAnalysed) continue;
+    if (!result) {
+      Error e = result.error();
+      e.message = where + e.message;
+      return e;
+    }
+    item.result = std::move(*result);
+    if (!queue.push(std::move(item))) break;
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<int> sequence_frame_count(const FrameRequest& request) {
+  auto src = frame_source(request);
+  if (!src) return src.error();
+  return src->total;
+}
+
+namespace {
+
+// The shared body of run_sequence and analyse_sequence.
+Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path& outbase, const SequenceOptions& options,
+                                     shading::Renderer* renderer, std::vector<temporal::FrameDecision>* decided) {
+  if (!decided && (outbase.empty() || !outbase.has_filename()))
+    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
+  auto src = frame_source(request);
+  if (!src) return src.error();
+  auto video = video_settings(request);
+  if (!video) return video.error();
+  const temporal::TemporalSettings ts = temporal_settings(request);
+  if (auto ok = temporal::validate(ts); !ok) return ok.error();
+  request.at("durable");
+  (void)metadata_settings(request);
+
+  int first = 0, count = src->total;
+  const ShardSpec* shard = options.shard ? &*options.shard : nullptr;
+  if (shard) {
+    if (!shard->track || static_cast<int>(shard->track->size()) != src->total)
+      return make_error("sequence.plan", fmt::format("the plan's track has {} frames, the sequence {}",
+                                                     shard->track ? shard->track->size() : 0, src->total));
+    if (shard->first_frame < 0 || shard->frame_count < 1 || shard->first_frame + shard->frame_count > src->total)
+      return make_error("sequence.plan", fmt::format("frames {}..{} are outside the sequence's {}", shard->first_frame,
+                                                     shard->first_frame + shard->frame_count - 1, src->total));
+    first = shard->first_frame, count = shard->frame_count;
+    std::error_code ec;
+    fs::create_directories(shard->work_dir / "frames", ec);
+    if (ec) return make_error("io.write", fmt::format("cannot make {}: {}", (shard->work_dir / "frames").string(), ec.message()));
+  }
 
   std::unique_ptr<shading::Renderer> own_renderer;
   if (request.source == Source::render && !renderer) {
@@ -492,9 +744,7 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path&
   }
 
   temporal::TemporalTone tone(ts);
-  const bool dynamic_peak = request.boolean("tone.dynamic_peak");
-  const nlohmann::json& given_params = request.at("tone.params");
-  std::optional<std::vector<Output>> outputs;
+  FrameLoop loop{request, options, *src, renderer, &tone, shard ? shard->track : nullptr, decided};
   std::optional<SequenceSink> sink;
   BoundedQueue<FrameItem> queue(options.queue_depth);
   std::optional<Error> failure;
@@ -509,97 +759,188 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path&
     return failure.has_value();
   };
   std::thread writer;
-  auto join_writer = [&] {
-    if (writer.joinable()) writer.join();
-  };
   struct Joiner {
-    std::function<void()> f;
-    ~Joiner() { f(); }
-  } joiner{[&] {
-    queue.close();
-    join_writer();
-  }};
-
-  for (int i = 0; i < total && !failed(); ++i) {
-    if (options.job.should_stop && options.job.should_stop()) {
-      fail(make_error("request.cancelled", "cancelled"));
-      break;
+    BoundedQueue<FrameItem>& q;
+    std::thread& t;
+    ~Joiner() {
+      q.close();
+      if (t.joinable()) t.join();
     }
-    FrameItem item;
-    item.index = i;
-    item.time_s = start_s + i * dt;
-    JobOptions jo = options.job;
-    jo.time_s = item.time_s;
-    jo.temporal = [&](const SceneInput& in, PreparedPipeline& p) -> Result<void> {
-      // The samples the exposure metered, when it read the image (the same ones, once).
-      std::shared_ptr<const std::vector<float>> lum = p.luminance_nits;
-      if (!lum) lum = std::make_shared<const std::vector<float>>(scene_luminance_nits(in, p.unit_nits));
-      auto d = tone.next_metered(*lum, p.metering.scale, dt);
-      if (!d) return d.error();
-      // Manual and camera exposure are what the request (or the scene's keyframes) says,
-      // frame by frame: exactly each frame's single-frame encode. Metered modes adapt.
-      const auto mode = p.settings.exposure.mode;
-      if (mode != exposure::Mode::manual && mode != exposure::Mode::camera) set_exposure_scale(p, d->exposure_scale);
-      const std::string_view param = p.curve_info ? source_peak_param(*p.curve_info) : std::string_view();
-      if (dynamic_peak && !param.empty() && !given_params.contains(std::string(param))) {
-        if (auto ok = set_source_peak(p, d->source_peak); !ok) return ok.error();
-        item.source_peak_nits = d->source_peak * p.settings.target.paper_white_nits;
-      }
-      item.decision = *d;
-      return {};
-    };
-    EncodeInput input;
-    if (request.source == Source::encode) {
-      input.path = inputs[i];
-      item.input = inputs[i].filename().string();
-    }
-    FrameRequest frame_request = request;
-    auto job = FrameJob::create(std::move(frame_request), std::move(jo), input, outputs);
-    if (!job) {
-      fail(job.error());
-      break;
-    }
-    if (!outputs) {
-      auto o = frame_outputs(request, (*job)->target().mode, video.has_value());
-      if (!o) {
-        fail(o.error());
-        break;
-      }
-      outputs = *o;
-      if (auto ok = (*job)->set_outputs(*outputs); !ok) {
-        fail(ok.error());
-        break;
-      }
-      sink.emplace(request, outbase, options, video, total);
-      writer = std::thread([&] {
-        while (auto next = queue.pop()) {
-          const std::string where = next->input.empty() ? fmt::format("frame {} (t = {:g} s)", next->index, next->time_s)
-                                                        : fmt::format("frame {} ({})", next->index, next->input);
-          if (auto ok = sink->consume(std::move(*next)); !ok) {
-            Error e = ok.error();
-            e.message = where + ": " + e.message;
-            return fail(std::move(e));
-          }
+  } joiner{queue, writer};
+  auto start_sink = [&] {
+    if (decided) return;
+    sink.emplace(request, outbase, options, *video, count);
+    if (shard) sink->set_scenes_before(shard->scenes_before);
+    writer = std::thread([&] {
+      while (auto next = queue.pop()) {
+        const std::string where = next->input.empty() ? fmt::format("frame {} (t = {:g} s)", next->index, next->time_s)
+                                                      : fmt::format("frame {} ({})", next->index, next->input);
+        if (auto ok = sink->consume(std::move(*next)); !ok) {
+          Error e = ok.error();
+          e.message = where + ": " + e.message;
+          return fail(std::move(e));
         }
-      });
-    }
-    auto result = run_frame_job(**job, renderer);
-    if (!result) {
-      Error e = result.error();
-      e.message = (request.source == Source::encode ? fmt::format("frame {} ({}): ", i, item.input)
-                                                     : fmt::format("frame {} (t = {:g} s): ", i, item.time_s)) +
-                  e.message;
-      fail(std::move(e));
-      break;
-    }
-    item.result = std::move(*result);
-    if (!queue.push(std::move(item))) break;
-  }
+      }
+    });
+  };
+  auto ran = run_frames(loop, first, count, std::nullopt, start_sink, queue, failed, fail);
+  if (!ran) fail(ran.error());
   queue.finish();
-  join_writer();
+  if (writer.joinable()) writer.join();
   if (failed()) return *failure;
-  auto out = sink->finish(fps);
-  if (!out) return out.error();
+  if (decided) return SequenceResult{};
+  return sink->finish(src->fps);
+}
+
+}  // namespace
+
+Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path& outbase, const SequenceOptions& options,
+                                    shading::Renderer* renderer) {
+  return sequence_body(request, outbase, options, renderer, nullptr);
+}
+
+Result<std::vector<temporal::FrameDecision>> analyse_sequence(const FrameRequest& request, const SequenceOptions& options,
+                                                              shading::Renderer* renderer) {
+  if (options.shard) return make_error("internal", "the analysis covers the whole sequence, not a shard");
+  std::vector<temporal::FrameDecision> decided;
+  auto r = sequence_body(request, {}, options, renderer, &decided);
+  if (!r) return r.error();
+  return decided;
+}
+
+namespace {
+
+// The per-frame dumps into place, each sidecar naming its files as a one-process run names
+// them; `placed` gets every file made.
+Result<void> place_frames(const std::vector<std::pair<fs::path, fs::path>>& moves, const fs::path& outbase,
+                          std::vector<fs::path>& placed) {
+  for (const auto& [from, to] : moves) {
+    if (from.extension() == ".json") {
+      auto text = read_text(from);
+      if (!text) return text.error();
+      nlohmann::json j = nlohmann::json::parse(*text, nullptr, false);
+      if (!j.is_object() || !j["files"].is_object())
+        return make_error("sequence.shard", fmt::format("{} is not a frame's sidecar", from.string()));
+      // "frame.00012.raw" -> "OUTBASE-name.00012.raw"
+      for (auto& [kind, name] : j["files"].items())
+        if (name.is_string() && name.get<std::string>().rfind("frame.", 0) == 0)
+          name = outbase.filename().string() + name.get<std::string>().substr(5);
+      const std::string out = j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+      if (auto ok = io::atomic_write(to, std::span(reinterpret_cast<const std::uint8_t*>(out.data()), out.size())); !ok)
+        return ok.error();
+      placed.push_back(to);
+      continue;
+    }
+    // A hard link where the work dir and OUTBASE share a file system (no copy), else a copy:
+    // the work dir stays whole, so the merge can run again.
+    std::error_code ec;
+    fs::remove(to, ec);
+    fs::create_hard_link(from, to, ec);
+    if (ec) {
+      ec.clear();
+      fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+      if (ec) return make_error("io.write", fmt::format("cannot copy {} to {}: {}", from.string(), to.string(), ec.message()));
+    }
+    placed.push_back(to);
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<SequenceResult> merge_sequence_shards(const FrameRequest& request, const std::vector<fs::path>& shard_stats,
+                                             const std::string& fingerprint, const fs::path& outbase) {
+  if (outbase.empty() || !outbase.has_filename())
+    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
+  auto src = frame_source(request);
+  if (!src) return src.error();
+  auto settings_of_video = video_settings(request);
+  if (!settings_of_video) return settings_of_video.error();
+  const std::optional<video::VideoSettings>& vs = *settings_of_video;
+  SequenceSummary sum;
+  std::optional<video::SequenceMetadata> metadata;
+  std::vector<fs::path> segments;
+  std::vector<std::pair<fs::path, fs::path>> moves;  // per-frame dumps: work dir -> OUTBASE.NNNNN.EXT
+  video::StreamInfo stream_info{};
+  int next_frame = 0;
+  for (std::size_t i = 0; i < shard_stats.size(); ++i) {
+    const std::string shard = fmt::format("shard {} of {}", i, shard_stats.size());
+    auto text = read_text(shard_stats[i]);
+    if (!text) return make_error("sequence.shard", fmt::format("{}: {}", shard, text.error().message));
+    const nlohmann::json st = nlohmann::json::parse(*text, nullptr, false);
+    if (!st.is_object() || st.value("format", "") != "hdrd-sequence-shard")
+      return make_error("sequence.shard", fmt::format("{}: {} is not a shard's statistics", shard, shard_stats[i].string()));
+    if (st.value("fingerprint", "") != fingerprint)
+      return make_error("sequence.shard", fmt::format("{} was made from another plan (fingerprint {}, the plan's {})", shard,
+                                                      st.value("fingerprint", "none"), fingerprint));
+    if (st.value("first_frame", -1) != next_frame)
+      return make_error("sequence.shard", fmt::format("{} starts at frame {}, expected {}", shard, st.value("first_frame", -1),
+                                                      next_frame));
+    const auto& frames = st["frames"];
+    const auto& lights = st["lights"];
+    if (!frames.is_array() || !lights.is_array() || frames.size() != lights.size() ||
+        static_cast<int>(frames.size()) != st.value("frame_count", -1) || frames.empty())
+      return make_error("sequence.shard", fmt::format("{}: its frame list is inconsistent", shard));
+    if (!metadata) {
+      sum.first_sidecar = st["first_sidecar"];
+      sum.frame_kinds = st["frame_kinds"].get<std::vector<std::string>>();
+      // The signal the frames were encoded for: the request's display, resolved as the
+      // shards resolved it (no render; the frames' own size from the first shard).
+      EncodeInput input;
+      if (request.source == Source::encode) input.path = src->inputs.front();
+      auto job = FrameJob::create(request, {}, input, std::vector<Output>{});
+      if (!job) return job.error();
+      const DisplayTarget target = (*job)->target();
+      metadata.emplace(target, target.mastering(), metadata_settings(request));
+      stream_info = {sum.first_sidecar.value("width", 0), sum.first_sidecar.value("height", 0), target,
+                     target.mastering()};
+    }
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      auto light = light_from_json(lights[k]);
+      if (!light) return light.error();
+      if (auto ok = metadata->add(*light, frames[k].value("scene_start", false)); !ok) return ok.error();
+      sum.frames.push_back(frames[k]);
+      const int index = next_frame + static_cast<int>(k);
+      for (const auto& kind : sum.frame_kinds) {
+        const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+        const fs::path from = shard_stats[i].parent_path() / "frames" / fmt::format("frame.{:05d}{}", index, ext);
+        if (!fs::exists(from)) return make_error("sequence.shard", fmt::format("{}: {} is missing", shard, from.string()));
+        moves.emplace_back(from, fs::path(frame_base(outbase, index) + ext));
+      }
+    }
+    for (const auto& w : st["warnings"])
+      if (std::find(sum.warnings.begin(), sum.warnings.end(), w.get<std::string>()) == sum.warnings.end())
+        sum.warnings.push_back(w.get<std::string>());
+    if (vs) {
+      if (!st["segment"].is_string()) return make_error("sequence.shard", fmt::format("{} has no video segment", shard));
+      segments.push_back(shard_stats[i].parent_path() / st["segment"].get<std::string>());
+    }
+    next_frame += static_cast<int>(frames.size());
+  }
+  if (next_frame != src->total)
+    return make_error("sequence.shard", fmt::format("the shards hold {} frames, the sequence {}", next_frame, src->total));
+  metadata->finish();
+  std::optional<video::VideoResult> result_video;
+  if (vs) {
+    auto v = video::SequenceWriter::join_segments(outbase, *vs, stream_info, segments, *metadata);
+    if (!v) return v.error();
+    result_video = std::move(*v);
+  }
+  // Everything placed at OUTBASE goes again if a later step fails: all or nothing.
+  std::vector<fs::path> placed;
+  if (result_video) placed.push_back(result_video->path);
+  struct Undo {
+    std::vector<fs::path>& files;
+    bool done = false;
+    ~Undo() {
+      std::error_code ec;
+      if (!done)
+        for (const auto& f : files) fs::remove(f, ec);
+    }
+  } undo{placed};
+  if (auto ok = place_frames(moves, outbase, placed); !ok) return ok.error();
+  auto out = write_sequence_outputs(request, outbase, src->fps, sum, *metadata, result_video);
+  if (out) undo.done = true;
   return out;
 }
 

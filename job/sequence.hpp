@@ -25,6 +25,7 @@
 
 #include "encode/frame.hpp"
 #include "encode/result.hpp"
+#include "encode/tone/temporal.hpp"
 #include "job/frame_job.hpp"
 #include "job/request.hpp"
 
@@ -48,8 +49,24 @@ struct SequenceProgress {
   double eta_s = 0;  // time left at that rate
 };
 
+// One shard of a planned sequence (job/sequence_plan.hpp, docs/cluster.md): its frames,
+// decided by the plan's track instead of in line, so that a frame's result does not depend
+// on which shard made it.
+struct ShardSpec {
+  int shard = 0;
+  int first_frame = 0, frame_count = 0;
+  int scenes_before = 0;                                        // scenes started before first_frame
+  const std::vector<temporal::FrameDecision>* track = nullptr;  // every frame of the sequence
+  std::filesystem::path work_dir;                               // shard-I.segment/.json/.done, frames/
+  std::string fingerprint;                                      // the plan's
+};
+
 struct SequenceOptions {
   JobOptions job;                 // threads, scene files, cancellation (should_stop)
+  // A shard: the writer stage writes its video segment, the frames' dumps and statistics
+  // into the work dir (shard-I.segment, frames/frame.NNNNN.EXT, shard-I.json, then
+  // shard-I.done) instead of the sequence's outputs.
+  std::optional<ShardSpec> shard;
   // After every frame written, on the writer thread (the CLI's bar, the daemon's job state).
   std::function<void(const SequenceProgress&)> progress;
   // Live output (hdrd render --present): every encoded frame in order, on the writer
@@ -71,5 +88,22 @@ struct SequenceResult {
 // request's `images` setting.
 Result<SequenceResult> run_sequence(const FrameRequest& request, const std::filesystem::path& outbase,
                                     const SequenceOptions& options, shading::Renderer* renderer = nullptr);
+
+// The number of frames the request's sequence has (its inputs resolved; no frame made).
+Result<int> sequence_frame_count(const FrameRequest& request);
+
+// The analysis pass of a planned sequence: every frame metered and decided exactly as
+// run_sequence decides it in line (each frame's job stops once it is decided: no encode,
+// no outputs). A render is rendered (its metering is the rendered frame's); an EXR is read.
+Result<std::vector<temporal::FrameDecision>> analyse_sequence(const FrameRequest& request,
+                                                              const SequenceOptions& options,
+                                                              shading::Renderer* renderer = nullptr);
+
+// Joins the shards' statistics (shard-I.json, in order), segments and frames into the
+// sequence's outputs at OUTBASE, as run_sequence writes them. Refuses a shard of another
+// plan (fingerprint), a gap or overlap, or a missing file, naming the shard.
+Result<SequenceResult> merge_sequence_shards(const FrameRequest& request,
+                                             const std::vector<std::filesystem::path>& shard_stats,
+                                             const std::string& fingerprint, const std::filesystem::path& outbase);
 
 }  // namespace hdrd::job

@@ -240,13 +240,17 @@ Result<void> SequenceMetadata::add(const EncodedFrame& frame, bool scene_start) 
   if (frame.target.mode != target_.mode)
     return make_error("video.mode", fmt::format("frame {} is {}, the sequence {}", frames_, to_string(frame.target.mode),
                                                 to_string(target_.mode)), "display.mode");
-  if (has_dynamic_metadata()) return add(measure_frame_light(frame), scene_start);
+  return add(light_of(frame), scene_start);
+}
+
+FrameLight SequenceMetadata::light_of(const EncodedFrame& frame) const {
+  if (has_dynamic_metadata()) return measure_frame_light(frame);
   // HLG and SDR need the content light alone, which the encoder measured with the frame
   // (HLG's per-pixel OOTF makes a second decode cost ~20 ns a pixel).
   FrameLight light;
   light.max_nits = frame.content_light.max_cll_nits;
   light.mean_nits = frame.content_light.max_fall_nits;
-  return add(light, scene_start);
+  return light;
 }
 
 Result<void> SequenceMetadata::add(const FrameLight& light, bool scene_start) {

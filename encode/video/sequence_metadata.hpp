@@ -68,6 +68,8 @@ class SequenceMetadata {
   // (measure_frame_light); others contribute their EncodedFrame::content_light.
   Result<void> add(const EncodedFrame& frame, bool scene_start);
   Result<void> add(const FrameLight& light, bool scene_start);  // when the caller measured it
+  // What add(frame) adds: the frame's measured light (hdr10), else its content light alone.
+  FrameLight light_of(const EncodedFrame& frame) const;
   // Closes the last scene; afterwards only the accessors below.
   void finish();
 

@@ -15,6 +15,7 @@
 #include "tools/common/progress_bar.hpp"
 #include "tools/common/settings_cli.hpp"
 #include "tools/hdrd/command.hpp"
+#include "tools/hdrd/frame_args.hpp"
 
 namespace hdrd::cli {
 namespace {
@@ -121,21 +122,29 @@ void run_sequence(const FrameCommand& o, job::FrameRequest request) {
   print_out(sequence_summary(*result, o.common.json));
 }
 
+// The request JSON of what was typed, and whether it is a sequence: any sequence setting
+// given, or an encode input that only a sequence can be (its frames then go in `images`).
+std::pair<nlohmann::json, bool> request_doc(const FrameCommand& o) {
+  auto doc = request_json(o.args);
+  if (!doc) throw HdrdError(doc.error());
+  if (o.source == job::Source::pattern) (*doc)["pattern"] = o.pattern;
+  const bool sequence =
+      o.source != job::Source::pattern &&
+      (job::sets_sequence_settings(*doc) || (o.source == job::Source::encode && job::names_a_sequence(o.input)));
+  if (sequence && o.source == job::Source::encode) (*doc)["images"] = o.input;
+  return {std::move(*doc), sequence};
+}
+
 void run(const FrameCommand& o) {
   set_progress_enabled(!o.common.quiet);
   if (o.source == job::Source::pattern && o.list) return print_pattern_list(o.common.json);
   if (o.source == job::Source::pattern && o.pattern.empty())
     throw CliError("a pattern name is required (see hdrd pattern --list)");
   if (o.outbase.empty()) throw CliError("-o OUTBASE is required");
-  auto doc = request_json(o.args);
-  if (!doc) throw HdrdError(doc.error());
-  if (o.source == job::Source::pattern) (*doc)["pattern"] = o.pattern;
+  auto [doc, sequence] = request_doc(o);
   auto ctx = cli_context(o.source);
-  // A sequence: any sequence setting given, or an encode input that only a sequence can be.
-  ctx.sequence = o.source != job::Source::pattern &&
-                 (job::sets_sequence_settings(*doc) || (o.source == job::Source::encode && job::names_a_sequence(o.input)));
-  if (ctx.sequence && o.source == job::Source::encode) (*doc)["images"] = o.input;
-  auto request = job::parse_request_json(*doc, ctx);
+  ctx.sequence = sequence;
+  auto request = job::parse_request_json(doc, ctx);
   if (request && ctx.sequence) return run_sequence(o, std::move(*request));
   if (!request) throw HdrdError(request.error());
   job::JobOptions options;
@@ -199,8 +208,7 @@ constexpr Spec kPattern{
     "  hdrd pattern sdr-grey --mode hdr10 --sdr-white 203 -o out/sdr-grey\n"
     "Patterns are display-referred: levels are cd/m2 on the display, encoded with the clip curve."};
 
-void setup(CLI::App& root, const Spec& spec) {
-  auto o = std::make_shared<FrameCommand>();
+CLI::App* add_frame_command(CLI::App& root, const Spec& spec, const std::shared_ptr<FrameCommand>& o) {
   o->source = spec.source;
   auto* app = root.add_subcommand(spec.name, spec.description);
   if (spec.source == job::Source::encode)
@@ -216,10 +224,36 @@ void setup(CLI::App& root, const Spec& spec) {
   add_setting_options(*app, spec.source, job::Reach::cli, o->args);
   add_common_options(*app, o->common);
   app->footer(spec.footer);
-  app->callback([o] { run(*o); });
+  return app;
+}
+
+void setup(CLI::App& root, const Spec& spec) {
+  auto o = std::make_shared<FrameCommand>();
+  add_frame_command(root, spec, o)->callback([o] { run(*o); });
 }
 
 }  // namespace
+
+FrameArgs parse_frame_args(const std::vector<std::string>& args) {
+  CLI::App app("hdrd");
+  auto render = std::make_shared<FrameCommand>(), encode = std::make_shared<FrameCommand>();
+  add_frame_command(app, kRender, render);
+  add_frame_command(app, kEncode, encode);
+  app.require_subcommand(1, 1);
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+  try {
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    throw CliError(fmt::format("{}: {}", args.empty() ? "render|encode" : args.front(), e.what()));
+  }
+  const auto& o = app.got_subcommand("render") ? *render : *encode;
+  FrameArgs out;
+  out.source = o.source;
+  std::tie(out.request, out.sequence) = request_doc(o);
+  if (o.source == job::Source::encode) out.request["images"] = o.input;  // a plan is always a sequence
+  return out;
+}
+
 }  // namespace hdrd::cli
 
 HDRD_REGISTER_COMMAND("render", 15, [](CLI::App& root) { hdrd::cli::setup(root, hdrd::cli::kRender); })
