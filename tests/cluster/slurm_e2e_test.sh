@@ -1,0 +1,130 @@
+#!/usr/bin/env bash
+# End to end on a real one-node Slurm cluster (scripts/slurm-local.sh, started by the ctest
+# fixture cluster.slurm.start into CLUSTER_DIR): deploy/slurm/submit.sh submits a 3-shard
+# plan, and the test checks from Slurm's own records (squeue, the job completion log) that
+#   1. every shard ran exactly once and succeeded, the merge ran after all of them, and the
+#      merged output exists (and, with the stand-in, holds every frame once, in order);
+#   2. a failing shard keeps the merge from running (afterok; it is cancelled);
+#   3. resubmitting only the failed shard (--shards 1) completes the sequence.
+#
+#   tests/cluster/slurm_e2e_test.sh CLUSTER_DIR
+# HDRD_BIN: the program under test (default: the stand-in beside this script); the jobs run
+# it through run_log_wrapper.sh, which logs every call and fails shard I on demand.
+# HDRD_PLAN_ARGS: what follows `hdrd sequence plan --shards 3 -o PLAN.json` (default:
+# --frames 12, which the stand-in takes). Exit 77 (skip) when there is no cluster here.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+cluster=${1:?usage: slurm_e2e_test.sh CLUSTER_DIR}
+if [ ! -f "$cluster/env.sh" ]; then
+  reason=$("$root/scripts/slurm-local.sh" check) && reason="the cluster fixture (cluster.slurm.start) did not start one"
+  echo "SKIP: no local Slurm cluster: $reason"
+  exit 77
+fi
+command -v jq >/dev/null || { echo "SKIP: jq missing (Debian package jq)"; exit 77; }
+. "$cluster/env.sh"
+program=${HDRD_BIN:-$here/stand_in_hdrd.sh}
+read -r -a plan_args <<<"${HDRD_PLAN_ARGS:---frames 12}"
+stand_in=0
+[ "$program" = "$here/stand_in_hdrd.sh" ] && stand_in=1
+# The jobs inherit the submitting environment (sbatch --export=ALL, its default).
+export HDRD_WRAPPED=$program HDRD_BIN=$here/run_log_wrapper.sh
+work=$(mktemp -d /tmp/hdrd-slurm-e2e.XXXXXX)
+trap 'rm -rf "$work"' EXIT
+n=3
+failures=0
+
+fail() { echo "FAIL: $*" >&2; failures=$((failures + 1)); }
+check() { local what=$1; shift; if "$@"; then echo "ok: $what"; else fail "$what"; fi; }
+
+# Waits (at most 60 s) until none of the jobs is pending, running or completing.
+wait_jobs() {
+  local ids=$1 t0=$SECONDS
+  while squeue -h -r -t all -j "$ids" -o '%T' | grep -Eq '^(PENDING|CONFIGURING|RUNNING|COMPLETING|REQUEUED|RESIZING|SUSPENDED)$'; do
+    if (( SECONDS - t0 > 60 )); then squeue -r -t all -j "$ids" >&2; return 1; fi
+    sleep 0.2
+  done
+}
+# "TASK STATE" per array task of job $1, sorted by task.
+task_states() { squeue -h -r -t all -j "$1" -o '%K %T' | sort -n; }
+job_state() { squeue -h -t all -j "$1" -o '%T'; }
+job_reason() { squeue -h -t all -j "$1" -o '%r'; }
+# The completion log's records (one per finished job or array task): KEY=VALUE fields.
+jobcomp_field() {  # jobcomp_field FILTER_KEY FILTER_VALUE FIELD
+  grep -o "JobId=[^ ]* .*" "$cluster/log/jobcomp.txt" | awk -v k="$1" -v v="$2" -v f="$3" '
+    { delete r; for (i = 1; i <= NF; ++i) { split($i, kv, "="); r[kv[1]] = substr($i, length(kv[1]) + 2) }
+      if (r[k] == v) print r[f] }'
+}
+epoch() { date -d "$1" +%s; }
+
+submit() {  # submit PLAN OUTBASE [submit.sh options]: sets array_id and merge_id
+  local out t0 t1
+  t0=$(date +%s%N)
+  out=$("$root/deploy/slurm/submit.sh" "$@" --json)
+  t1=$(date +%s%N)
+  array_id=$(jq -r .array_job_id <<<"$out")
+  merge_id=$(jq -r .merge_job_id <<<"$out")
+  echo "submitted array $array_id, merge $merge_id in $(( (t1 - t0) / 1000000 )) ms"
+}
+
+# --- 1. a plan runs through: every shard once, then the merge ------------------------------
+"$program" sequence plan --shards "$n" -o "$work/ok.json" "${plan_args[@]}"
+t_submit=$(date +%s%N)
+submit "$work/ok.json" "$work/ok"
+wait_jobs "$array_id,$merge_id" || fail "the jobs did not finish within 60 s"
+t_done=$(date +%s%N)
+echo "array + merge finished $(( (t_done - t_submit) / 1000000 )) ms after submission"
+check "every shard's array task completed" \
+  test "$(task_states "$array_id")" = "$(printf '%s COMPLETED\n' $(seq 0 $((n - 1))))"
+check "the merge job completed" test "$(job_state "$merge_id")" = COMPLETED
+# Ran once: one completion record per task (a requeued or retried task would leave two).
+for ((i = 0; i < n; ++i)); do
+  records=$(grep -c "ArrayJobId=$array_id ArrayTaskId=$i " "$cluster/log/jobcomp.txt" || true)
+  check "shard $i has one completion record" test "$records" = 1
+done
+last_shard_end=$(jobcomp_field ArrayJobId "$array_id" EndTime | while read -r t; do epoch "$t"; done | sort -n | tail -1)
+merge_start=$(epoch "$(jobcomp_field JobId "$merge_id" StartTime)")
+check "the merge started after the last shard ended (Slurm's clock)" test "$merge_start" -ge "$last_shard_end"
+work_dir=$(jq -r .work_dir "$work/ok.json")
+check "the merged video exists" test -s "$work/ok.mp4"
+if [ "$stand_in" = 1 ]; then
+  check "the merged output holds every frame once, in order" \
+    test "$(cat "$work/ok.mp4")" = "$(printf 'frame %d\n' $(seq 0 11))"
+fi
+check "each shard ran once, and succeeded (the wrapper's log)" \
+  test "$(awk '$1 == "run" { print $2 $5 }' "$work_dir/runs.log" | sort | tr '\n' ' ')" = "00 10 20 "
+check "the merge ran once" test "$(grep -c '^merge' "$work_dir/runs.log")" = 1
+merge_start_ns=$(awk '$1 == "merge" { print $3 }' "$work_dir/runs.log")
+last_end_ns=$(awk '$1 == "run" { print $4 }' "$work_dir/runs.log" | sort -n | tail -1)
+check "the merge started after the last shard ended (nanosecond clock)" test "$merge_start_ns" -gt "$last_end_ns"
+
+# --- 2. a failing shard: the merge is cancelled, never run ---------------------------------
+"$program" sequence plan --shards "$n" -o "$work/bad.json" "${plan_args[@]}"
+bad_dir=$(jq -r .work_dir "$work/bad.json")
+: >"$bad_dir/fail-shard-1"
+submit "$work/bad.json" "$work/bad"
+wait_jobs "$array_id,$merge_id" || fail "the failing plan's jobs did not finish within 60 s"
+check "shard 1 failed, shards 0 and 2 completed" \
+  test "$(task_states "$array_id")" = "$(printf '0 COMPLETED\n1 FAILED\n2 COMPLETED')"
+check "the merge was cancelled" test "$(job_state "$merge_id")" = CANCELLED
+check "... because its dependency can never be met" test "$(job_reason "$merge_id")" = DependencyNeverSatisfied
+check "the merge wrote nothing" test ! -e "$work/bad.mp4"
+check "the merge program never ran" test "$(grep -c '^merge' "$bad_dir/runs.log" || true)" = 0
+
+# --- 3. retry: resubmit the failed shard only ----------------------------------------------
+rm -f "$bad_dir/fail-shard-1"
+submit "$work/bad.json" "$work/bad" --shards 1
+wait_jobs "$array_id,$merge_id" || fail "the retry's jobs did not finish within 60 s"
+check "the retried shard completed" test "$(task_states "$array_id")" = "1 COMPLETED"
+check "the retry's merge completed" test "$(job_state "$merge_id")" = COMPLETED
+check "the retried sequence's merged video exists" test -s "$work/bad.mp4"
+check "the retried sequence equals the clean run (same bytes)" cmp -s "$work/ok.mp4" "$work/bad.mp4"
+check "shards 0 and 2 ran once, shard 1 failed once and then succeeded once" \
+  test "$(awk '$1 == "run" { print $2 ":" $5 }' "$bad_dir/runs.log" | sort | tr '\n' ' ')" = "0:0 1:0 1:3 2:0 "
+
+if [ "$failures" -gt 0 ]; then
+  echo "$failures check(s) failed; slurmctld log tail:" >&2
+  tail -20 "$cluster/log/slurmctld.log" >&2
+  exit 1
+fi
+echo "all checks passed"
