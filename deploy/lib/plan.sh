@@ -4,7 +4,7 @@
 #
 # plan_read PLAN.json sets
 #   PLAN_PATH      the plan's absolute path
-#   PLAN_SHARDS    N, the number of shards (an integer >= 1)
+#   PLAN_SHARDS    N, the number of shards (an integer from 1 to 1000000)
 #   PLAN_FRAMES    the number of frames (an integer >= 1)
 #   PLAN_WORK_DIR  the absolute work dir (a relative one is relative to the plan's folder)
 # or prints one line naming what is wrong on stderr ("$prog: plan PLAN.json: ...", where
@@ -60,10 +60,12 @@ if not isinstance(plan, dict):
     fail("not a JSON object")
 if plan.get("format") != "hdrd-sequence-plan":
     fail(f"format is {json.dumps(plan.get('format'))}, expected \"hdrd-sequence-plan\"")
-for key in ("shards", "frames"):
-    v = plan.get(key)
-    if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-        fail(f"{key} is {json.dumps(v)}, expected an integer >= 1")
+v = plan.get("shards")
+if not isinstance(v, int) or isinstance(v, bool) or not 1 <= v <= 1000000:
+    fail(f"shards is {json.dumps(v)}, expected an integer from 1 to 1000000")
+v = plan.get("frames")
+if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+    fail(f"frames is {json.dumps(v)}, expected an integer >= 1")
 w = plan.get("work_dir")
 if not isinstance(w, str) or not w or "\n" in w or "\0" in w:
     fail(f"work_dir is {json.dumps(w)}, expected a path")
@@ -77,7 +79,7 @@ _plan_read_jq() {
     try (
       check(type == "object"; "not a JSON object")
       | check(.format == "hdrd-sequence-plan"; "format is \(.format | tojson), expected \"hdrd-sequence-plan\"")
-      | check((.shards | type) == "number" and .shards == (.shards | floor) and .shards >= 1; "shards is \(.shards | tojson), expected an integer >= 1")
+      | check((.shards | type) == "number" and .shards == (.shards | floor) and .shards >= 1 and .shards <= 1000000; "shards is \(.shards | tojson), expected an integer from 1 to 1000000")
       | check((.frames | type) == "number" and .frames == (.frames | floor) and .frames >= 1; "frames is \(.frames | tojson), expected an integer >= 1")
       | check((.work_dir | type) == "string" and .work_dir != "" and (.work_dir | test("[\n\u0000]") | not); "work_dir is \(.work_dir | tojson), expected a path")
       | "\(.shards)\n\(.frames)\n\(.work_dir)"
