@@ -97,14 +97,18 @@ PartitionName=hdrd Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 EOF
 }
 
-# Waits up to $2 seconds for a command to succeed; returns 1 on timeout.
+# wait_for SECONDS COMMAND...: runs COMMAND until it succeeds; returns 1 after SECONDS.
 wait_for() {
-  local cmd=$1 limit=$2 t0=$SECONDS
-  until eval "$cmd" >/dev/null 2>&1; do
+  local limit=$1 t0=$SECONDS
+  shift
+  until "$@" >/dev/null 2>&1; do
     (( SECONDS - t0 < limit )) || return 1
     sleep 0.1
   done
 }
+
+controller_up() { scontrol ping | grep -q UP; }
+node_up() { sinfo -h -N -o %t | grep -Eq '^(idle|mix|alloc)$'; }
 
 cmd_start() {
   local dir=${1:?start needs a directory} cpus=${2:-4}
@@ -130,14 +134,14 @@ EOF
   munged --force --socket="$dir/munge/munge.socket" --key-file="$dir/munge/munge.key" \
     --pid-file="$dir/run/munged.pid" --log-file="$dir/log/munged.log" \
     --seed-file="$dir/munge/munged.seed" || { cat "$dir/log/munged.log" >&2; die "munged did not start"; }
-  wait_for "munge --socket='$dir/munge/munge.socket' -n </dev/null" 10 || die "munged does not answer"
+  wait_for 10 munge --socket="$dir/munge/munge.socket" --input=/dev/null || die "munged does not answer"
 
   export SLURM_CONF=$dir/etc/slurm.conf
   slurmctld -f "$SLURM_CONF" || { tail -20 "$dir/log/slurmctld.log" >&2; die "slurmctld did not start"; }
-  wait_for "scontrol ping | grep -q UP" 20 || { tail -20 "$dir/log/slurmctld.log" >&2; die "slurmctld does not answer"; }
+  wait_for 20 controller_up || { tail -20 "$dir/log/slurmctld.log" >&2; die "slurmctld does not answer"; }
   slurmd -f "$SLURM_CONF" -N hdrdnode || { tail -20 "$dir/log/slurmd.log" >&2; die "slurmd did not start"; }
   # Ready when the node takes jobs: idle (or mixed/allocated), not down/unknown/drained.
-  wait_for "sinfo -h -N -o %t | grep -Eq '^(idle|mix|alloc)\$'" 30 \
+  wait_for 30 node_up \
     || { tail -20 "$dir/log/slurmd.log" >&2; sinfo -N -l >&2 || true; die "slurmd did not register with slurmctld"; }
   local t_end
   t_end=$(date +%s.%N)

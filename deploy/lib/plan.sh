@@ -54,8 +54,8 @@ def fail(what):
 try:
     with open(path, encoding="utf-8") as f:
         plan = json.load(f)
-except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-    fail(f"not a JSON file ({e})")
+except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+    fail("not a JSON file")
 if not isinstance(plan, dict):
     fail("not a JSON object")
 if plan.get("format") != "hdrd-sequence-plan":

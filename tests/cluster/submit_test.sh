@@ -95,24 +95,31 @@ refuses "too few arguments" "usage:" "$plan"
 # The plan-header rules, case by case from the table daemon/slurm.cpp is tested on too.
 # One jq run writes case-N.json and case-N.expect (the error, empty for a good plan).
 mkdir -p "$tmp/cases"
-count=$(jq -r --arg d "$tmp/cases" '.cases | length' "$here/plan_header_cases.json")
+count=$(jq '.cases | length' "$here/plan_header_cases.json")
 for ((c = 0; c < count; ++c)); do
   jq -j ".cases[$c].text" "$here/plan_header_cases.json" >"$tmp/cases/case-$c.json"
 done
 jq -r '.cases[] | "\(.error // "")|\(.name)"' "$here/plan_header_cases.json" >"$tmp/cases/index.txt"
+# plan_read itself (in a subshell, as submit.sh calls it) for the table; submit.sh for the
+# prefix and the exit status on two of them.
+. "$(dirname "$submit")/../lib/plan.sh"
 for reader in jq python3; do
   export HDRD_PLAN_READER=$reader
   refuses "a missing plan ($reader)" "plan $tmp/none.json: no such file" "$tmp/none.json" "$tmp/out/seq"
+  refuses "a bad plan ($reader)" "submit.sh: plan $tmp/cases/case-8.json: shards is 0" "$tmp/cases/case-8.json" "$tmp/out/seq"
   c=0
   while IFS='|' read -r expected name; do
     plan_c=$tmp/cases/case-$c.json
     c=$((c + 1))
+    rc=0
+    err=$( (prog=submit.sh; plan_read "$plan_c") 2>&1 >/dev/null) || rc=$?
     if [ -n "$expected" ]; then
-      refuses "a plan with $name ($reader)" "plan $plan_c: $expected" "$plan_c" "$tmp/out/seq"
-    elif out=$("$submit" "$plan_c" "$tmp/out/seq" --dry-run 2>&1); then
+      if [ "$rc" = 1 ] && [ "$err" = "submit.sh: plan $plan_c: $expected" ]; then echo "ok: refuses a plan with $name ($reader)"
+      else fail "refuses a plan with $name ($reader): rc=$rc '$err' (expected '$expected')"; fi
+    elif [ "$rc" = 0 ] && [ -z "$err" ]; then
       echo "ok: reads a plan with $name ($reader)"
     else
-      fail "reads a plan with $name ($reader): $out"
+      fail "reads a plan with $name ($reader): rc=$rc '$err'"
     fi
   done <"$tmp/cases/index.txt"
 done
