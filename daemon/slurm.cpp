@@ -99,9 +99,10 @@ Error line_error(const std::string& code, std::size_t line, const std::string& w
 }
 
 // An array index expression as squeue (%K) and sacct (JobID after '_') print it: "7",
-// "2-5", "0-15:4", "1,3-4%2", optionally in brackets. Appends the indices to `tasks`.
-Result<void> expand_tasks(std::string_view spec, std::vector<std::uint32_t>& tasks, const std::string& code,
-                          std::size_t line) {
+// "2-5", "0-15:4", "1,3-4%2", optionally in brackets. Appends the indices to `tasks`, at
+// most `room` of them (a few bytes of range must not become millions of rows).
+Result<void> expand_tasks(std::string_view spec, std::vector<std::uint32_t>& tasks, std::size_t room,
+                          const std::string& code, std::size_t line) {
   const bool bracketed = spec.size() >= 2 && spec.front() == '[' && spec.back() == ']';
   if (bracketed) spec = spec.substr(1, spec.size() - 2);
   if (const auto pct = spec.find('%'); pct != std::string_view::npos) {  // a throttle: no tasks of its own
@@ -127,8 +128,8 @@ Result<void> expand_tasks(std::string_view spec, std::vector<std::uint32_t>& tas
       return line_error(code, line, "bad array index " + quote_text(item));
     if (first > last || last >= kMaxArrayTasks)
       return line_error(code, line, "array index range " + quote_text(item) + " is backwards or beyond Slurm's limit");
-    if (tasks.size() + (last - first) / step >= kMaxArrayTasks)
-      return line_error(code, line, "more array tasks than Slurm allows");
+    if (tasks.size() + (last - first) / step >= room)
+      return line_error(code, line, "more rows than the " + std::to_string(room) + " expected");
     for (std::uint64_t t = first; t <= last; t += step) tasks.push_back(std::uint32_t(t));
     if (comma == std::string_view::npos) return {};
     start = comma + 1;
@@ -228,7 +229,7 @@ Result<std::uint64_t> parse_sbatch_parsable(std::string_view out) {
   return id;
 }
 
-Result<std::vector<TaskStatus>> parse_squeue(std::string_view out) {
+Result<std::vector<TaskStatus>> parse_squeue(std::string_view out, std::size_t max_rows) {
   const std::string code = "slurm.squeue_output";
   auto lines = split_lines(out, code);
   if (!lines) return lines.error();
@@ -241,19 +242,19 @@ Result<std::vector<TaskStatus>> parse_squeue(std::string_view out) {
     if (!parse_uint(f[0], t->job_id) || t->job_id == 0) return line_error(code, n + 1, "bad job id " + quote_text(f[0]));
     if (!printable(f[3])) return line_error(code, n + 1, "bad reason " + quote_text(f[3]));
     t->reason = std::string(f[3]);
+    if (result.size() >= max_rows) return line_error(code, n + 1, "more rows than the " + std::to_string(max_rows) + " expected");
     if (f[1] == "N/A") {
       result.push_back(std::move(*t));
       continue;
     }
     std::vector<std::uint32_t> tasks;
-    if (auto r = expand_tasks(f[1], tasks, code, n + 1); !r) return r.error();
+    if (auto r = expand_tasks(f[1], tasks, max_rows - result.size(), code, n + 1); !r) return r.error();
     append_tasks(result, *t, tasks);
-    if (result.size() > kMaxArrayTasks) return line_error(code, n + 1, "more array tasks than Slurm allows");
   }
   return result;
 }
 
-Result<std::vector<TaskStatus>> parse_sacct(std::string_view out) {
+Result<std::vector<TaskStatus>> parse_sacct(std::string_view out, std::size_t max_rows) {
   const std::string code = "slurm.sacct_output";
   auto lines = split_lines(out, code);
   if (!lines) return lines.error();
@@ -272,14 +273,15 @@ Result<std::vector<TaskStatus>> parse_sacct(std::string_view out) {
     const auto underscore = f[0].find('_');
     if (!parse_uint(f[0].substr(0, underscore), t->job_id) || t->job_id == 0)
       return line_error(code, n + 1, "bad job id " + quote_text(f[0]));
+    if (result.size() >= max_rows) return line_error(code, n + 1, "more rows than the " + std::to_string(max_rows) + " expected");
     if (underscore == std::string_view::npos) {
       result.push_back(std::move(*t));
       continue;
     }
     std::vector<std::uint32_t> tasks;
-    if (auto r = expand_tasks(f[0].substr(underscore + 1), tasks, code, n + 1); !r) return r.error();
+    if (auto r = expand_tasks(f[0].substr(underscore + 1), tasks, max_rows - result.size(), code, n + 1); !r)
+      return r.error();
     append_tasks(result, *t, tasks);
-    if (result.size() > kMaxArrayTasks) return line_error(code, n + 1, "more array tasks than Slurm allows");
   }
   return result;
 }
@@ -436,7 +438,7 @@ Result<Progress> Client::progress(const Submission& s) const {
   if (q->exit_code != 0 && q->err.find("Invalid job id specified") == std::string::npos)
     return make_error("slurm.squeue", "squeue failed: " + quote_text(first_line(q->err)), "squeue");
   if (q->exit_code == 0) {
-    auto rows = parse_squeue(q->out);
+    auto rows = parse_squeue(q->out, s.shards.size() + 1);
     if (!rows) return rows.error();
     collect(*rows, s, shards, merge);
   }
@@ -445,7 +447,7 @@ Result<Progress> Client::progress(const Submission& s) const {
     auto a = run("sacct", {"--noheader", "--parsable2", "--allocations", jobs, "--format=" + std::string(kSacctFormat)});
     if (!a && a.error().code != "process.spawn") return a.error();
     if (a && a->exit_code == 0) {
-      auto rows = parse_sacct(a->out);
+      auto rows = parse_sacct(a->out, s.shards.size() + 1);
       if (!rows) return rows.error();
       collect(*rows, s, shards, merge);
     }

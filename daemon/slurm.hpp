@@ -42,14 +42,17 @@ Result<std::uint64_t> parse_sbatch_parsable(std::string_view out);
 
 // `squeue --noheader --array --states=all --format=` kSqueueFormat: one line per job or
 // array task, "ARRAY_JOB_ID|TASK|STATE|REASON" (TASK "N/A" for a plain job; a range such as
-// "2-5%2" or "[1,3-4]" for tasks not yet split off, expanded here). Errors "slurm.squeue_output".
+// "2-5%2" or "[1,3-4]" for tasks not yet split off, expanded here). More than max_rows rows
+// (the caller knows how many jobs it asked about) is an error, so a short range cannot
+// become millions of rows. Errors "slurm.squeue_output".
 inline constexpr std::string_view kSqueueFormat = "%F|%K|%T|%r";
-Result<std::vector<TaskStatus>> parse_squeue(std::string_view out);
+inline constexpr std::size_t kMaxRows = 100000;
+Result<std::vector<TaskStatus>> parse_squeue(std::string_view out, std::size_t max_rows = kMaxRows);
 
 // `sacct --noheader --parsable2 --allocations --format=` kSacctFormat: "JOBID|STATE|EXITCODE"
-// with JOBID "123", "123_4" or "123_[5-7%2]". Errors "slurm.sacct_output".
+// with JOBID "123", "123_4" or "123_[5-7%2]"; max_rows as for squeue. Errors "slurm.sacct_output".
 inline constexpr std::string_view kSacctFormat = "JobID,State,ExitCode";
-Result<std::vector<TaskStatus>> parse_sacct(std::string_view out);
+Result<std::vector<TaskStatus>> parse_sacct(std::string_view out, std::size_t max_rows = kMaxRows);
 
 // The header of an `hdrd sequence plan` file (the fields every engine needs; the same rules
 // as deploy/lib/plan.sh, tested on the same cases). Errors "plan.*" with the field.

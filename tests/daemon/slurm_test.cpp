@@ -136,6 +136,8 @@ TEST(SlurmParse, SqueueRangesStepsAndBrackets) {
 struct Malformed {
   std::string name, text, message;
 };
+// ctest lists the case by name, not as gtest's dump of the struct's bytes.
+void PrintTo(const Malformed& m, std::ostream* os) { *os << m.name; }
 
 class SqueueMalformed : public ::testing::TestWithParam<Malformed> {};
 
@@ -159,6 +161,7 @@ INSTANTIATE_TEST_SUITE_P(
         Malformed{"job_id_overflow", "99999999999999999999|N/A|PENDING|None\n", "line 1: bad job id '99999999999999999999'"},
         Malformed{"backwards_range", "10|5-2|PENDING|None\n", "line 1: array index range '5-2' is backwards or beyond Slurm's limit"},
         Malformed{"range_beyond_limit", "10|0-4000001|PENDING|None\n", "line 1: array index range '0-4000001' is backwards or beyond Slurm's limit"},
+        Malformed{"range_beyond_the_rows_expected", "10|0-4000000|PENDING|None\n", "line 1: more rows than the 100000 expected"},
         Malformed{"open_bracket", "10|[1-3|PENDING|None\n", "line 1: bad array index '[1-3'"},
         Malformed{"bad_throttle", "10|1-3%x|PENDING|None\n", "line 1: bad array throttle in '1-3%x'"},
         Malformed{"zero_step", "10|1-3:0|PENDING|None\n", "line 1: bad array step in '1-3:0'"},
@@ -178,6 +181,17 @@ TEST(SlurmParse, SacctParsable2Layout) {
                                                 "20_3:pending:0:0", "20_4:pending:0:0", "20_5:pending:0:0",
                                                 "21_-:cancelled:0:0", "22_-:failed:0:125"}));
   EXPECT_EQ((*r)[2].slurm_state, "CANCELLED");
+}
+
+TEST(SlurmParse, RowsBeyondWhatWasAskedForAreRefused) {
+  // The client asks about one array of 3 tasks and one merge job: 4 rows at most.
+  ASSERT_TRUE(parse_squeue("7|0-2|PENDING|None\n8|N/A|PENDING|Dependency\n", 4));
+  auto r = parse_squeue("7|0-4|PENDING|None\n8|N/A|PENDING|Dependency\n", 4);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().message, "line 1: more rows than the 4 expected");
+  auto lines = parse_sacct("7_0|COMPLETED|0:0\n7_1|COMPLETED|0:0\n7_2|COMPLETED|0:0\n", 2);
+  ASSERT_FALSE(lines);
+  EXPECT_EQ(lines.error().message, "line 3: more rows than the 2 expected");
 }
 
 TEST(SlurmParse, SacctRefusesOtherShapes) {

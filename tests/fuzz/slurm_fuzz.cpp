@@ -3,8 +3,8 @@
 // parser. Links only hdrd_daemon_slurm.
 //
 // Invariants beyond "no crash": an accepted line set gives rows with a job id > 0, a known
-// state whose name maps back to it, and task indices below Slurm's array limit; an error has
-// a code and a one-line message.
+// state whose name maps back to it, task indices below Slurm's array limit and at most
+// kMaxRows rows; an error has a code and a one-line message.
 #include <cstdint>
 #include <cstdlib>
 #include <string>
@@ -28,6 +28,7 @@ void check_error(const Error& e) {
 
 void check_rows(const Result<std::vector<TaskStatus>>& r) {
   if (!r) return check_error(r.error());
+  check(r->size() <= kMaxRows);  // a short range must not become millions of rows
   for (const auto& t : *r) {
     check(t.job_id > 0);
     auto s = map_state(t.slurm_state);
