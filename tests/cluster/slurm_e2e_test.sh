@@ -5,13 +5,17 @@
 #   1. every shard ran exactly once and succeeded, the merge ran after all of them, and the
 #      merged output exists (and, with the stand-in, holds every frame once, in order);
 #   2. a failing shard keeps the merge from running (afterok; it is cancelled);
-#   3. resubmitting only the failed shard (--shards 1) completes the sequence.
+#   3. resubmitting only the failed shard (--shards 1) completes the sequence;
+#   4. the sharded result equals a one-process run of the same options (same_outputs).
 #
 #   tests/cluster/slurm_e2e_test.sh CLUSTER_DIR
 # HDRD_BIN: the program under test (default: the stand-in beside this script); the jobs run
 # it through run_log_wrapper.sh, which logs every call and fails shard I on demand.
 # HDRD_PLAN_ARGS: what follows `hdrd sequence plan --shards 3 -o PLAN.json` (default:
 # --frames 12, which the stand-in takes). Exit 77 (skip) when there is no cluster here.
+# HDRD_ONE_PROCESS_ARGS: the one-process run of the same sequence, `$HDRD_BIN ARGS -o OUTBASE`
+# (default for the stand-in: encode --frames 12); unset with a real HDRD_BIN: part 4 is
+# skipped, saying so.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -31,6 +35,7 @@ stand_in=0
 export HDRD_WRAPPED=$program HDRD_BIN=$here/run_log_wrapper.sh
 work=$(mktemp -d /tmp/hdrd-slurm-e2e.XXXXXX)
 trap 'rm -rf "$work"' EXIT
+mkdir "$work/out"  # OUTBASEs here: the check of part 4 compares every OUTBASE.* file
 n=3
 failures=0
 
@@ -68,9 +73,9 @@ submit() {  # submit PLAN OUTBASE [submit.sh options]: sets array_id and merge_i
 }
 
 # --- 1. a plan runs through: every shard once, then the merge ------------------------------
-"$program" sequence plan --shards "$n" -o "$work/ok.json" "${plan_args[@]}"
+"$program" sequence plan --shards "$n" -o "$work/ok.plan.json" "${plan_args[@]}"
 t_submit=$(date +%s%N)
-submit "$work/ok.json" "$work/ok"
+submit "$work/ok.plan.json" "$work/out/ok"
 wait_jobs "$array_id,$merge_id" || fail "the jobs did not finish within 60 s"
 t_done=$(date +%s%N)
 echo "array + merge finished $(( (t_done - t_submit) / 1000000 )) ms after submission"
@@ -85,11 +90,11 @@ done
 last_shard_end=$(jobcomp_field ArrayJobId "$array_id" EndTime | while read -r t; do epoch "$t"; done | sort -n | tail -1)
 merge_start=$(epoch "$(jobcomp_field JobId "$merge_id" StartTime)")
 check "the merge started after the last shard ended (Slurm's clock)" test "$merge_start" -ge "$last_shard_end"
-work_dir=$(jq -r .work_dir "$work/ok.json")
-check "the merged video exists" test -s "$work/ok.mp4"
+work_dir=$(jq -r .work_dir "$work/ok.plan.json")
+check "the merged video exists" test -s "$work/out/ok.mp4"
 if [ "$stand_in" = 1 ]; then
   check "the merged output holds every frame once, in order" \
-    test "$(cat "$work/ok.mp4")" = "$(printf 'frame %d\n' $(seq 0 11))"
+    test "$(cat "$work/out/ok.mp4")" = "$(printf 'frame %d\n' $(seq 0 11))"
 fi
 check "each shard ran once, and succeeded (the wrapper's log)" \
   test "$(awk '$1 == "run" { print $2 $5 }' "$work_dir/runs.log" | sort | tr '\n' ' ')" = "00 10 20 "
@@ -99,28 +104,70 @@ last_end_ns=$(awk '$1 == "run" { print $4 }' "$work_dir/runs.log" | sort -n | ta
 check "the merge started after the last shard ended (nanosecond clock)" test "$merge_start_ns" -gt "$last_end_ns"
 
 # --- 2. a failing shard: the merge is cancelled, never run ---------------------------------
-"$program" sequence plan --shards "$n" -o "$work/bad.json" "${plan_args[@]}"
-bad_dir=$(jq -r .work_dir "$work/bad.json")
+"$program" sequence plan --shards "$n" -o "$work/bad.plan.json" "${plan_args[@]}"
+bad_dir=$(jq -r .work_dir "$work/bad.plan.json")
 : >"$bad_dir/fail-shard-1"
-submit "$work/bad.json" "$work/bad"
+submit "$work/bad.plan.json" "$work/out/bad"
 wait_jobs "$array_id,$merge_id" || fail "the failing plan's jobs did not finish within 60 s"
 check "shard 1 failed, shards 0 and 2 completed" \
   test "$(task_states "$array_id")" = "$(printf '0 COMPLETED\n1 FAILED\n2 COMPLETED')"
 check "the merge was cancelled" test "$(job_state "$merge_id")" = CANCELLED
 check "... because its dependency can never be met" test "$(job_reason "$merge_id")" = DependencyNeverSatisfied
-check "the merge wrote nothing" test ! -e "$work/bad.mp4"
+check "the merge wrote nothing" test -z "$(ls -A "$work/out" | grep "^bad\\." || true)"
 check "the merge program never ran" test "$(grep -c '^merge' "$bad_dir/runs.log" || true)" = 0
 
 # --- 3. retry: resubmit the failed shard only ----------------------------------------------
 rm -f "$bad_dir/fail-shard-1"
-submit "$work/bad.json" "$work/bad" --shards 1
+submit "$work/bad.plan.json" "$work/out/bad" --shards 1
 wait_jobs "$array_id,$merge_id" || fail "the retry's jobs did not finish within 60 s"
 check "the retried shard completed" test "$(task_states "$array_id")" = "1 COMPLETED"
 check "the retry's merge completed" test "$(job_state "$merge_id")" = COMPLETED
-check "the retried sequence's merged video exists" test -s "$work/bad.mp4"
-check "the retried sequence equals the clean run (same bytes)" cmp -s "$work/ok.mp4" "$work/bad.mp4"
+check "the retried sequence's merged video exists" test -s "$work/out/bad.mp4"
+check "the retried sequence equals the clean run (same bytes)" cmp -s "$work/out/ok.mp4" "$work/out/bad.mp4"
 check "shards 0 and 2 ran once, shard 1 failed once and then succeeded once" \
   test "$(awk '$1 == "run" { print $2 ":" $5 }' "$bad_dir/runs.log" | sort | tr '\n' ' ')" = "0:0 1:0 1:3 2:0 "
+
+# --- 4. the sharded result equals the one-process run ------------------------------------
+# same_outputs A B: the same OUTBASE.* files; a video's decoded frames equal (ffmpeg's
+# framemd5: pts and the hash of each decoded frame, so container timestamps written at
+# mux time cannot hide or fake a difference), JSON equal as data (jq -S), anything else
+# byte for byte. Prints what differs.
+video_frames() {  # video_frames FILE: "PTS HASH" per decoded frame; fails for a non-video
+  ffprobe -v error -select_streams v:0 -show_entries stream=codec_type -of csv=p=0 "$1" 2>/dev/null | grep -qx video \
+    && ffmpeg -nostdin -v error -i "$1" -map 0:v:0 -f framemd5 - | awk -F', *' '!/^#/ { print $3, $6 }'
+}
+same_outputs() {
+  local a=$1 b=$2 f suffix ok=0 fa fb
+  if [ "$(cd "$(dirname "$a")" && ls -1 "$(basename "$a")".* | sed "s|^$(basename "$a")||")" != \
+       "$(cd "$(dirname "$b")" && ls -1 "$(basename "$b")".* | sed "s|^$(basename "$b")||")" ]; then
+    echo "different files: $(ls -1 "$a".* | tr '\n' ' ')vs $(ls -1 "$b".* | tr '\n' ' ')" >&2
+    return 1
+  fi
+  for f in "$a".*; do
+    suffix=${f#"$a"}
+    if command -v ffprobe >/dev/null && fa=$(video_frames "$f") && [ -n "$fa" ]; then
+      fb=$(video_frames "$b$suffix") || fb=""
+      [ "$fa" = "$fb" ] || { echo "$suffix: the decoded frames differ: $(diff <(echo "$fa") <(echo "$fb") | head -3 | tr '\n' ' ')" >&2; ok=1; }
+    elif [[ "$suffix" == *.json ]]; then
+      cmp -s <(jq -S . "$f") <(jq -S . "$b$suffix") || { echo "$suffix: the JSON differs" >&2; ok=1; }
+    else
+      cmp -s "$f" "$b$suffix" || { echo "$suffix: the bytes differ" >&2; ok=1; }
+    fi
+  done
+  return "$ok"
+}
+one_args=${HDRD_ONE_PROCESS_ARGS-}
+[ "$stand_in" = 1 ] && [ -z "$one_args" ] && one_args="encode ${plan_args[*]}"
+if [ -n "$one_args" ]; then
+  read -r -a one <<<"$one_args"
+  mkdir -p "$work/one-process"
+  t0=$(date +%s%N)
+  "$program" "${one[@]}" -o "$work/one-process/ok"
+  echo "the one-process run took $(( ($(date +%s%N) - t0) / 1000000 )) ms"
+  check "the sharded result equals the one-process run ($one_args)" same_outputs "$work/one-process/ok" "$work/out/ok"
+else
+  echo "not checked: the sharded result against a one-process run (set HDRD_ONE_PROCESS_ARGS with HDRD_BIN)"
+fi
 
 if [ "$failures" -gt 0 ]; then
   echo "$failures check(s) failed; slurmctld log tail:" >&2

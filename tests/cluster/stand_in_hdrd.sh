@@ -6,8 +6,10 @@
 #   plan --shards N -o PLAN.json [--frames F]   work dir PLAN.json.d/, outbase null
 #   run PLAN.json --shard I                     frames of shard I into work_dir/shard-I.txt,
 #                                               then work_dir/shard-I.done
-#   merge PLAN.json -o OUTBASE                  OUTBASE.mp4 = the shards' text in order;
-#                                               exit 1 with one line when a shard is missing
+#   merge PLAN.json -o OUTBASE                  OUTBASE.mp4 = the shards' text in order,
+#                                               OUTBASE.json = {"frames": F}; exit 1 with
+#                                               one line when a shard is missing
+#   encode --frames F -o OUTBASE                the one-process run: the same two files
 set -euo pipefail
 prog=hdrd
 die() { echo "hdrd: $*" >&2; exit 1; }
@@ -19,7 +21,33 @@ read_plan() {
   n=$PLAN_SHARDS frames=$PLAN_FRAMES work=$PLAN_WORK_DIR
 }
 
-[ "${1:-}" = sequence ] || die "the stand-in knows only 'sequence'"
+# write_outputs OUTBASE FRAMES < the frames' text: OUTBASE.mp4 and OUTBASE.json, each
+# renamed into place whole.
+write_outputs() {
+  local tmp
+  tmp=$(mktemp "$1.XXXXXX")
+  cat >"$tmp"
+  mv "$tmp" "$1.mp4"
+  tmp=$(mktemp "$1.XXXXXX")
+  printf '{"frames": %d}\n' "$2" >"$tmp"
+  mv "$tmp" "$1.json"
+}
+
+if [ "${1:-}" = encode ]; then  # the one-process run the sharded one must equal
+  shift
+  out="" frames=12
+  while [ $# -gt 0 ]; do
+    case "$1" in
+      -o) out=$2; shift 2 ;;
+      --frames) frames=$2; shift 2 ;;
+      *) shift ;;
+    esac
+  done
+  [ -n "$out" ] || die "encode: -o OUTBASE is required"
+  for ((f = 0; f < frames; ++f)); do echo "frame $f"; done | write_outputs "$out" "$frames"
+  exit 0
+fi
+[ "${1:-}" = sequence ] || die "the stand-in knows only 'sequence' and 'encode'"
 verb=${2:-}
 shift 2
 case "$verb" in
@@ -58,9 +86,7 @@ case "$verb" in
     for ((i = 0; i < n; ++i)); do
       [ -e "$work/shard-$i.done" ] || die "sequence merge: shard $i of $n is missing (no $work/shard-$i.done)"
     done
-    tmp=$(mktemp "$outbase.XXXXXX")
-    for ((i = 0; i < n; ++i)); do cat "$work/shard-$i.txt"; done >"$tmp"
-    mv "$tmp" "$outbase.mp4"
+    for ((i = 0; i < n; ++i)); do cat "$work/shard-$i.txt"; done | write_outputs "$outbase" "$frames"
     ;;
   *) die "sequence: unknown verb '$verb'" ;;
 esac

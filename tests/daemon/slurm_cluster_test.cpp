@@ -55,7 +55,7 @@ class SlurmCluster : public ::testing::Test {
 
   // A plan from the program under test (the stand-in takes --frames).
   fs::path make_plan(const std::string& name, int shards) {
-    const fs::path plan = tmp_ / (name + ".json");
+    const fs::path plan = tmp_ / (name + ".plan.json");  // not OUTBASE.json, which a merge may write
     const char* extra = std::getenv("HDRD_PLAN_ARGS");
     const auto r = hdrd::testing::run_command(std::string(std::getenv("HDRD_WRAPPED")) + " sequence plan --shards " +
                                               std::to_string(shards) + " -o " + plan.string() + " " +
