@@ -126,7 +126,7 @@ Result<SequencePlan> make_sequence_plan(const json& request, Source source, int 
   plan.shards = shards;
   plan.source = source;
   plan.plan_path = plan_path;
-  plan.work_dir = plan_path.filename().string() + ".d";  // beside the plan
+  plan.work_dir = fs::absolute(plan_path).lexically_normal().string() + ".d";  // beside the plan, as every node sees it
   plan.request = absolute_paths(request);
   auto parsed = parse_request_json(plan.request, plan_context(source));
   if (!parsed) return parsed.error();

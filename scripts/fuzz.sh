@@ -5,7 +5,7 @@
 # crash-* files in $BUILD_DIR/fuzz-out/NAME.
 #
 # Usage: scripts/fuzz.sh [-t SECONDS_PER_TARGET] [TARGET...]
-#   targets: edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz
+#   targets: edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz slurm_fuzz
 # env: BUILD_DIR (default build-fuzz), JOBS
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,7 +18,7 @@ while getopts "t:h" opt; do
 done
 shift $((OPTIND - 1))
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz)
+[ ${#targets[@]} -gt 0 ] || targets=(edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz slurm_fuzz)
 build_dir=${BUILD_DIR:-build-fuzz}
 command -v clang++-14 >/dev/null || { echo "fuzz: clang++-14 is missing (scripts/install-deps.sh installs it)" >&2; exit 2; }
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
