@@ -30,26 +30,8 @@ fi
 build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
 command -v oiiotool >/dev/null || { echo "run-sequence: oiiotool missing (apt-get install openimageio-tools)" >&2; exit 1; }
 
-shared=${HDRD_SHARED_DIR:-../shared}
-src="$shared/fixtures/exr/MtTamWest.exr"
-[ -f "$src" ] || { echo "run-sequence: $src missing (set HDRD_SHARED_DIR)" >&2; exit 1; }
 work="$build_dir/bench-sequence"
-mkdir -p "$work"
-# pan NAME W H FRAMES: crops of a 1.25x enlargement, moving right by W/100 per frame.
-pan() {
-  local name=$1 w=$2 h=$3 n=$4 dir="$work/$1"
-  [ -f "$dir/pan.$(printf %03d $((n - 1))).exr" ] && return
-  mkdir -p "$dir"
-  local bw=$((w * 5 / 4)) bh=$((h * 5 / 4))
-  oiiotool "$src" --ch R,G,B --resize "${bw}x${bh}" -d half -o "$dir/big.exr"
-  for ((i = 0; i < n; ++i)); do
-    oiiotool "$dir/big.exr" --cut "${w}x${h}+$((i * w / 100))+$((h / 8))" -d half --compression zip \
-      -o "$dir/pan.$(printf %03d "$i").exr"
-  done
-}
-pan 1080p 1920 1080 24
-pan 4k 3840 2160 12
-pan small 640 360 100
+bash bench/make-pans.sh "$work"
 
 exec python3 - "$build_dir" "$work" "${REPS:-3}" "${SIZES:-1080p 4k}" "$build_type" <<'PY'
 import json, os, random, shutil, statistics, subprocess, sys, tempfile, time
