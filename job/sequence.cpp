@@ -697,10 +697,32 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
 
 }  // namespace
 
-Result<int> sequence_frame_count(const FrameRequest& request) {
+Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options) {
   auto src = frame_source(request);
   if (!src) return src.error();
-  return src->total;
+  const temporal::TemporalSettings ts = temporal_settings(request);
+  if (auto ok = temporal::validate(ts); !ok) return ok.error();
+  auto video = video_settings(request);
+  if (!video) return video.error();
+  SequenceCheck out;
+  out.frames = src->total;
+  out.inputs = src->inputs;
+  EncodeInput input;
+  if (request.source == Source::encode) input.path = src->inputs.front();
+  auto first = FrameJob::create(request, options, input, std::vector<Output>{});
+  if (!first) return first.error();
+  out.target = (*first)->target();
+  if (auto o = frame_outputs(request, out.target.mode, video->has_value()); !o) return o.error();
+  if (*video) {
+    video::StreamInfo stream;
+    stream.target = out.target;
+    stream.mastering = out.target.mastering();
+    // An encode's size is its EXRs' (known at its first frame): an even stand-in here.
+    stream.width = request.source == Source::render ? static_cast<int>(request.integer("width")) : 64;
+    stream.height = request.source == Source::render ? static_cast<int>(request.integer("height")) : 64;
+    if (auto ok = video::check_stream(**video, stream); !ok) return ok.error();
+  }
+  return out;
 }
 
 namespace {

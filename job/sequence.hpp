@@ -89,8 +89,17 @@ struct SequenceResult {
 Result<SequenceResult> run_sequence(const FrameRequest& request, const std::filesystem::path& outbase,
                                     const SequenceOptions& options, shading::Renderer* renderer = nullptr);
 
-// The number of frames the request's sequence has (its inputs resolved; no frame made).
-Result<int> sequence_frame_count(const FrameRequest& request);
+// What run_sequence refuses before its first frame, checked without rendering or encoding
+// one: the EXR files and the frame count, the temporal and video settings, the video
+// against the first frame's display target (H.264 is SDR only, scRGB has no video form) and
+// a render's frame size (4:2:0 needs an even size; an encode's size is its EXRs', checked
+// at the first frame). The daemon answers 4xx from it before 202.
+struct SequenceCheck {
+  int frames = 0;
+  std::vector<std::filesystem::path> inputs;  // an encode's EXR files, `frames` of them
+  DisplayTarget target;                       // the first frame's
+};
+Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options = {});
 
 // The analysis pass of a planned sequence: every frame metered and decided exactly as
 // run_sequence decides it in line (each frame's job stops once it is decided: no encode,

@@ -244,6 +244,13 @@ struct SequenceWriter::Impl {
                                                   const SequenceMetadata* meta, const io::Cta861Light& cll) const;
 };
 
+Result<void> check_stream(const VideoSettings& settings, const StreamInfo& stream) {
+  if (auto ok = validate(settings); !ok) return ok;
+  auto config = encoder_config(settings, stream);
+  if (!config) return config.error();
+  return {};
+}
+
 Result<std::unique_ptr<SequenceWriter>> SequenceWriter::open(const fs::path& outbase, const VideoSettings& settings,
                                                              const StreamInfo& stream) {
   auto impl = std::make_unique<Impl>();

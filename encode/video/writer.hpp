@@ -72,6 +72,10 @@ struct StreamInfo {
   MasteringDisplay mastering;  // for hdr10/hlg: ST 2086 in bitstream and container
 };
 
+// Whether open() would take the settings for the stream (codec for the mode, bit depth,
+// an even size, ...), without opening an encoder: a service answers 4xx before it starts.
+Result<void> check_stream(const VideoSettings& settings, const StreamInfo& stream);
+
 // What was written (for the sidecar): file, codec and profile as ffprobe names them,
 // pixel format, the H.273 tags, the static metadata carried.
 struct VideoResult {

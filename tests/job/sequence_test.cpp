@@ -313,7 +313,44 @@ TEST(Sequence, EverySequenceSettingIsRead) {
   auto r = run_sequence(*req, d / "out", {});
   ASSERT_TRUE(r.ok()) << r.error().message;
   for (const auto& s : settings())
-    if (s.sequence && s.takes(Source::encode)) EXPECT_TRUE(req->read.count(s.path)) << s.path << " is never read";
+    if (s.sequence && s.takes(Source::encode)) {
+      EXPECT_TRUE(req->read.count(s.path)) << s.path << " is never read";
+    }
+}
+
+}  // namespace
+}  // namespace hdrd::job
+
+namespace hdrd::job {
+namespace {
+
+// What a service checks before it accepts a sequence (202): no frame is made.
+TEST(SequenceCheck, RefusesBeforeTheFirstFrame) {
+  testing::TempDir d;
+  for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0);
+  const std::string images = (d / "s.%d.exr").string();
+  auto check = [&](json body) {
+    body["images"] = images;
+    auto r = parse_request_json(body, context(Source::encode, true));
+    EXPECT_TRUE(r.ok());
+    return check_sequence(*r);
+  };
+  auto ok = check(json{{"video", {{"codec", "hevc"}}}});
+  ASSERT_TRUE(ok.ok()) << ok.error().message;
+  EXPECT_EQ(ok->frames, 3);
+  EXPECT_EQ(ok->inputs.size(), 3u);
+  EXPECT_EQ(ok->target.mode, Mode::hdr10);
+  auto h264 = check(json{{"video", {{"codec", "h264"}}}});
+  ASSERT_FALSE(h264.ok());
+  EXPECT_NE(h264.error().message.find("H.264"), std::string::npos) << h264.error().message;
+  EXPECT_FALSE(check(json{{"frames", 4}}).ok());
+  EXPECT_FALSE(check(json{{"display", {{"mode", "scrgb"}}}, {"video", {{"codec", "hevc"}}}}).ok());
+  auto r = parse_request_json(json{{"scene", "furnace"}, {"width", 33}, {"height", 16}, {"video", {{"codec", "hevc"}}}},
+                              context(Source::render, true));
+  ASSERT_TRUE(r.ok());
+  auto odd = check_sequence(*r);
+  ASSERT_FALSE(odd.ok());
+  EXPECT_EQ(odd.error().code, "video.size") << odd.error().message;
 }
 
 }  // namespace
