@@ -302,4 +302,51 @@ BENCHMARK(BM_RenderEnvironment)->Unit(benchmark::kMillisecond)->Iterations(5)->U
 
 }  // namespace
 
+// A sequence's frames of a glTF fixture at 1280x720 (4x MSAA, full readback): each frame
+// reusing the scene loaded for the frame before (what render() does now for the same
+// scene) against loading, validating and uploading it again first (release_scene(): what
+// every frame did before scene reuse). Alternated frame by frame, medians.
+void BM_SequenceFrame(benchmark::State& state) {
+  Renderer* r = renderer();
+  if (!r) return state.SkipWithError("no GL context");
+  const char* fixtures[] = {"fixtures/gltf/MetalRoughSpheresNoTextures/MetalRoughSpheresNoTextures.glb",
+                            "fixtures/gltf/NormalTangentTest/NormalTangentTest.glb"};
+  const char* dir = std::getenv("HDRD_SHARED_DIR");
+  const std::filesystem::path path = std::filesystem::path(dir ? dir : "../shared") / fixtures[state.range(0)];
+  if (!std::filesystem::exists(path)) return state.SkipWithError(("missing fixture " + path.string()).c_str());
+  RenderRequest q;
+  q.scene = path.string();
+  q.width = 1280;
+  q.height = 720;
+  q.samples = 4;
+  if (!r->render(q).ok()) return state.SkipWithError("render failed");  // warm-up
+  std::vector<double> reuse_ms, reload_ms, load_ms, gpu_reuse_ms, gpu_reload_ms;
+  using Clock = std::chrono::steady_clock;
+  int frame = 0;
+  for (auto _ : state) {
+    for (bool reload : {true, false}) {
+      if (reload) r->release_scene();
+      q.time_s = ++frame / 24.0;
+      const auto t0 = Clock::now();
+      auto f = r->render(q);
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      if (!f) return state.SkipWithError(f.error().message.c_str());
+      (reload ? reload_ms : reuse_ms).push_back(ms);
+      if (reload) load_ms.push_back(f->scene_load_ms);
+      (reload ? gpu_reload_ms : gpu_reuse_ms).push_back(f->render_ms);
+    }
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  state.counters["reload_frame_ms"] = median(reload_ms);
+  state.counters["reuse_frame_ms"] = median(reuse_ms);
+  state.counters["load_ms"] = median(load_ms);
+  state.counters["render_reload_ms"] = median(gpu_reload_ms);  // GPU work incl. the geometry/texture upload
+  state.counters["render_reuse_ms"] = median(gpu_reuse_ms);
+  state.SetLabel(path.filename().string());
+}
+BENCHMARK(BM_SequenceFrame)->DenseRange(0, 1)->ArgName("fixture")->Unit(benchmark::kMillisecond)->Iterations(7)->UseRealTime();
+
 BENCHMARK_MAIN();

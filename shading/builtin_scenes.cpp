@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include "shading/animation.hpp"
 #include "shading/materials.hpp"
 #include "shading/scene_loader.hpp"
 #include "shading/shapes.hpp"
@@ -164,6 +165,33 @@ Scene furnace() {
   return s;
 }
 
+// A track of Vec3 keys.
+Track vec3_track(Interpolation interp, std::initializer_list<std::pair<double, Vec3>> keys) {
+  Track t;
+  t.interpolation = interp;
+  t.components = 3;
+  for (const auto& [time_s, v] : keys) {
+    t.times_s.push_back(time_s);
+    t.values.insert(t.values.end(), {v.x, v.y, v.z});
+  }
+  return t;
+}
+
+// The hdr scene's motion (kHdrWalkOutSeconds): the camera walks from the dark interior
+// (t = 0: the still scene's view) through the door out into the sunlit yard, so the
+// frame's luminance rises by more than ten stops (exposure adaptation's test).
+std::shared_ptr<const SceneAnimation> hdr_walk_out() {
+  auto a = std::make_shared<SceneAnimation>();
+  CameraAnimation c;
+  c.position = vec3_track(Interpolation::smooth, {{0.0, {0.6, 1.6, 7.4}},
+                                                  {2.0, {0.3, 1.55, 4.0}},
+                                                  {4.0, {0.0, 1.5, 0.6}},
+                                                  {kHdrWalkOutSeconds, {0.0, 1.6, -3.5}}});
+  c.target = vec3_track(Interpolation::smooth, {{0.0, {-0.2, 1.1, -5}}, {kHdrWalkOutSeconds, {-0.2, 1.0, -12}}});
+  a->camera = std::move(c);
+  return a;
+}
+
 // Sun + sky + a shadowed interior: from inside a dim room through a door into a sunlit
 // yard (> 16 stops between the dark interior and the sunlit ground, more to the sun's
 // highlight on a chrome sphere).
@@ -193,6 +221,7 @@ Scene hdr() {
   s.environment = sky(50, 45, 2.5);                 // a clear midday sky, the sun ahead and to the right
   s.lights.push_back(point({0.5, 2.6, 5.5}, 1.0));  // a 1 cd night light
   s.camera = Camera{{0.6, 1.6, 7.4}, {-0.2, 1.1, -5}, {0, 1, 0}, 62 * kPi / 180};
+  s.animation = hdr_walk_out();
   return s;
 }
 

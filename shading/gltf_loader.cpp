@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "encode/io/json_text.hpp"
+#include "shading/animation.hpp"
 #include "shading/gltf_internal.hpp"
 #include "shading/shapes.hpp"
 
@@ -24,6 +25,8 @@ namespace {
 constexpr std::uint64_t kMaxFileBytes = 1ULL << 30;  // tinygltf takes an unsigned int length
 constexpr std::size_t kMaxAccessorCount = 1u << 26;
 constexpr int kMaxNodeDepth = 128;
+// Keyframe values of all animations together (doubles on the CPU: 128 MiB at most).
+constexpr std::size_t kMaxAnimationValues = 1u << 24;
 // glTF's own structure nests six levels (materials[i].pbrMetallicRoughness.baseColorTexture
 // .extensions.KHR_texture_transform.offset); "extras" may add some.
 constexpr int kMaxJsonDepth = 64;
@@ -302,6 +305,8 @@ struct Loader {
   std::map<int, int> texture_map;                 // glTF texture -> scene texture
   std::map<std::pair<int, int>, std::pair<int, int>> primitives;  // (mesh, prim) -> (scene mesh, material)
   int default_material = -1;
+  std::vector<AnimatedNode> graph;  // every visited node, parents first
+  std::size_t animation_values = 0;
 
   Result<TextureRef> texture(int index, int tex_coord, double scale, const std::string& what) {
     if (index < 0) return TextureRef{};
@@ -433,28 +438,53 @@ struct Loader {
     return t * r * s;
   }
 
-  Result<void> visit(int index, const Mat4& parent, int depth, std::set<int>& path) {
+  // Visits a node and its children; records each visit in `graph` (animations re-pose it).
+  Result<void> visit(int index, const Mat4& parent, int depth, std::set<int>& path, int parent_record) {
     if (!in_range(index, m.nodes)) return gltf_error(fmt::format("node {} does not exist", index));
     if (depth > kMaxNodeDepth || path.count(index)) return gltf_error(fmt::format("node {} is part of a cycle or nests too deep", index));
     const tinygltf::Node& n = m.nodes[index];
     auto local = node_matrix(n);
     if (!local) return local.error();
     const Mat4 world = parent * *local;
+    AnimatedNode rec = rest_pose(n);
+    rec.gltf_node = index;
+    rec.parent = parent_record;
+    rec.first_instance = static_cast<int>(s.instances.size());
     if (n.mesh >= 0)
       if (auto r = add_mesh(n.mesh, world); !r) return r;
-    if (n.camera >= 0 && !s.camera)
+    rec.instance_count = static_cast<int>(s.instances.size()) - rec.first_instance;
+    if (n.camera >= 0 && !s.camera) {
       if (auto r = add_camera(n.camera, world); !r) return r;
+      rec.camera = true;
+    }
     if (auto it = n.extensions.find("KHR_lights_punctual"); it != n.extensions.end()) {
       const tinygltf::Value& li = it->second.Get("light");
       if (!li.IsInt() || !in_range(li.GetNumberAsInt(), m.lights))
         return gltf_error(fmt::format("node {}: KHR_lights_punctual light does not exist", index));
       if (auto r = add_light(li.GetNumberAsInt(), world); !r) return r;
+      rec.lights.push_back(static_cast<int>(s.lights.size()) - 1);
     }
+    graph.push_back(std::move(rec));
+    const int self = static_cast<int>(graph.size()) - 1;
     path.insert(index);
     for (int c : n.children)
-      if (auto r = visit(c, world, depth + 1, path); !r) return r;
+      if (auto r = visit(c, world, depth + 1, path, self); !r) return r;
     path.erase(index);
     return {};
+  }
+
+  static AnimatedNode rest_pose(const tinygltf::Node& n) {
+    AnimatedNode a;
+    if (n.matrix.size() == 16) {
+      Mat4 r;
+      for (int k = 0; k < 16; ++k) r.m[k] = n.matrix[k];
+      a.matrix = r;
+      return a;
+    }
+    if (n.translation.size() == 3) a.translation = {n.translation[0], n.translation[1], n.translation[2]};
+    if (n.rotation.size() == 4) a.rotation = {n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]};
+    if (n.scale.size() == 3) a.scale = {n.scale[0], n.scale[1], n.scale[2]};
+    return a;
   }
 
   Result<void> add_mesh(int mesh_index, const Mat4& world) {
@@ -530,6 +560,96 @@ struct Loader {
     return {};
   }
 
+  // ---- Animations (glTF 2.0 §3.11) ---------------------------------------------------------
+  // All of the file's animations play together from t = 0: exporters write one animation
+  // per animated object or action (Blender: one per object's action), and a shot needs all
+  // of them. Two channels on the same node property: the later one wins (a warning).
+  Result<Track> sampler_track(const tinygltf::AnimationSampler& smp, NodePath path, const std::string& what) {
+    Track t;
+    if (smp.interpolation.empty() || smp.interpolation == "LINEAR") t.interpolation = Interpolation::linear;
+    else if (smp.interpolation == "STEP") t.interpolation = Interpolation::step;
+    else if (smp.interpolation == "CUBICSPLINE") t.interpolation = Interpolation::cubic_spline;
+    else return gltf_error(fmt::format("{}: interpolation '{}' is not LINEAR, STEP or CUBICSPLINE", what, smp.interpolation));
+    auto in = view_accessor(m, smp.input, what + " input");
+    if (!in) return in.error();
+    if (in->components != 1 || in->component_type != TINYGLTF_COMPONENT_TYPE_FLOAT || !in->data)
+      return gltf_error(fmt::format("{} input (accessor {}): key times must be a SCALAR float accessor with data", what, smp.input));
+    auto out = view_accessor(m, smp.output, what + " output");
+    if (!out) return out.error();
+    t.rotation = path == NodePath::rotation;
+    t.components = t.rotation ? 4 : 3;
+    if (out->components != t.components)
+      return gltf_error(fmt::format("{} output (accessor {}): {} components per key, {} needs {}", what, smp.output,
+                                    out->components, path == NodePath::rotation ? "rotation" : "translation/scale", t.components));
+    // §3.11.2's accessor table: float everywhere; rotations also normalised (u)byte/(u)short.
+    const int ct = out->component_type;
+    const bool normalized_int = out->normalized && (ct == TINYGLTF_COMPONENT_TYPE_BYTE || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                                    ct == TINYGLTF_COMPONENT_TYPE_SHORT || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+    if (ct != TINYGLTF_COMPONENT_TYPE_FLOAT && !(t.rotation && normalized_int))
+      return gltf_error(fmt::format("{} output (accessor {}): component type {} is not allowed for {} (float{})", what,
+                                    smp.output, ct, t.rotation ? "rotation" : "translation/scale",
+                                    t.rotation ? " or normalized byte/short" : ""));
+    const std::size_t per_key = t.interpolation == Interpolation::cubic_spline ? 3 : 1;
+    if (out->count != in->count * per_key)
+      return gltf_error(fmt::format("{}: {} output elements for {} key times (expected {}{})", what, out->count, in->count,
+                                    in->count * per_key, per_key == 3 ? ": in-tangent, value, out-tangent per key" : ""));
+    animation_values += out->count * static_cast<std::size_t>(t.components);
+    if (animation_values > kMaxAnimationValues)
+      return gltf_error(fmt::format("{}: the animations hold more than {} values", what, kMaxAnimationValues));
+    t.times_s.resize(in->count);
+    for (std::size_t i = 0; i < in->count; ++i) t.times_s[i] = read_component(*in, i, 0);
+    t.values.resize(out->count * static_cast<std::size_t>(t.components));
+    for (std::size_t i = 0; i < out->count; ++i)
+      for (int c = 0; c < t.components; ++c) t.values[i * static_cast<std::size_t>(t.components) + static_cast<std::size_t>(c)] = read_component(*out, i, c);
+    if (auto v = validate_track(t, what, "gltf.invalid"); !v) return v.error();
+    return t;
+  }
+
+  Result<void> convert_animations() {
+    if (m.animations.empty()) return {};
+    std::vector<std::vector<int>> records(m.nodes.size());
+    for (std::size_t i = 0; i < graph.size(); ++i) records[static_cast<std::size_t>(graph[i].gltf_node)].push_back(static_cast<int>(i));
+    auto anim = std::make_shared<SceneAnimation>();
+    std::map<std::pair<int, NodePath>, std::string> targeted;
+    for (std::size_t a = 0; a < m.animations.size(); ++a) {
+      const tinygltf::Animation& an = m.animations[a];
+      bool warned_weights = false;
+      for (std::size_t c = 0; c < an.channels.size(); ++c) {
+        const tinygltf::AnimationChannel& ch = an.channels[c];
+        const std::string what = fmt::format("animations[{}] '{}' channels[{}]", a, an.name, c);
+        if (ch.target_path == "weights") {
+          if (!warned_weights) s.warnings.push_back(fmt::format("animations[{}] '{}': morph target weights are not animated", a, an.name));
+          warned_weights = true;
+          continue;
+        }
+        const std::optional<NodePath> path = ch.target_path == "translation" ? std::optional(NodePath::translation)
+                                             : ch.target_path == "rotation"  ? std::optional(NodePath::rotation)
+                                             : ch.target_path == "scale"     ? std::optional(NodePath::scale)
+                                                                             : std::nullopt;
+        if (!path) return gltf_error(fmt::format("{}: target.path '{}' is not translation, rotation, scale or weights", what, ch.target_path));
+        if (ch.target_node < 0) {  // §3.11.1: no node (an extension's target): ignored
+          s.warnings.push_back(what + ": has no target node; ignored");
+          continue;
+        }
+        if (!in_range(ch.target_node, m.nodes)) return gltf_error(fmt::format("{}: target node {} does not exist", what, ch.target_node));
+        if (m.nodes[static_cast<std::size_t>(ch.target_node)].matrix.size() == 16)
+          return gltf_error(fmt::format("{}: target node {} has a matrix (§3.11: only TRS nodes may be animated)", what, ch.target_node));
+        if (!in_range(ch.sampler, an.samplers)) return gltf_error(fmt::format("{}: sampler {} does not exist", what, ch.sampler));
+        auto track = sampler_track(an.samplers[static_cast<std::size_t>(ch.sampler)], *path,
+                                   fmt::format("{} sampler {}", what, ch.sampler));
+        if (!track) return track.error();
+        const auto [it, fresh] = targeted.emplace(std::make_pair(ch.target_node, *path), what);
+        if (!fresh) s.warnings.push_back(fmt::format("{} and {} animate node {} {}: the later one plays", it->second, what,
+                                                     ch.target_node, ch.target_path));
+        for (int rec : records[static_cast<std::size_t>(ch.target_node)]) anim->channels.push_back({rec, *path, *track});
+      }
+    }
+    if (anim->channels.empty()) return {};
+    anim->nodes = std::move(graph);
+    s.animation = std::move(anim);
+    return {};
+  }
+
   Result<void> run() {
     for (std::size_t i = 0; i < m.materials.size(); ++i)
       if (auto r = convert_material(static_cast<int>(i)); !r) return r;
@@ -544,9 +664,9 @@ struct Loader {
     }
     std::set<int> path;
     for (int r : roots)
-      if (auto e = visit(r, Mat4{}, 0, path); !e) return e;
+      if (auto e = visit(r, Mat4{}, 0, path, -1); !e) return e;
     if (s.instances.empty()) return gltf_error("the scene has no triangle meshes");
-    return {};
+    return convert_animations();
   }
 };
 
@@ -582,7 +702,7 @@ Result<Scene> convert(std::span<const std::uint8_t> bytes, const std::filesystem
   std::vector<std::string> warnings;
   auto model = parse(bytes, base_dir, options, warnings);
   if (!model) return model.error();
-  Loader l{*model, options, {}, {}, {}, -1};
+  Loader l{*model, options, {}, {}, {}, -1, {}, 0};
   if (auto r = l.run(); !r) return r.error();
   for (auto& w : warnings) l.s.warnings.push_back(std::move(w));
   return std::move(l.s);

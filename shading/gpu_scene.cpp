@@ -129,10 +129,10 @@ GlName make_ubo(const GlApi& gl, const void* data, std::size_t size) {
 
 }  // namespace
 
-Result<GpuScene> upload_scene(Renderer::Impl& r, const Scene& scene, const gpu::FrameBlock& frame,
-                              const gpu::LightBlock& lights) {
+Result<void> upload_geometry(Renderer::Impl& r, const Scene& scene, GpuScene& g) {
   const GlApi& gl = *r.gl;
-  GpuScene g;
+  g.meshes.clear();
+  g.textures.clear();
   for (const Mesh& m : scene.meshes) g.meshes.push_back(upload_mesh(gl, m));
   for (const Material& m : scene.materials) {
     const std::pair<const TextureRef*, bool> uses[] = {{&m.base_color_texture, true}, {&m.emissive_texture, true},
@@ -144,8 +144,12 @@ Result<GpuScene> upload_scene(Renderer::Impl& r, const Scene& scene, const gpu::
       if (!g.textures.count(key)) g.textures.emplace(key, upload_texture(gl, scene.textures[ref->index], srgb));
     }
   }
-  if (auto e = check_gl(gl, "uploading the scene's meshes and textures"); !e) return e.error();
+  return check_gl(gl, "uploading the scene's meshes and textures");
+}
 
+Result<void> upload_blocks(Renderer::Impl& r, const Scene& scene, const gpu::FrameBlock& frame,
+                           const gpu::LightBlock& lights, GpuScene& g) {
+  const GlApi& gl = *r.gl;
   g.frame_ubo = make_ubo(gl, &frame, sizeof(frame));
   g.light_ubo = make_ubo(gl, &lights, sizeof(lights));
   const auto align = static_cast<std::size_t>(std::max(r.ubo_alignment, 16));
@@ -158,8 +162,7 @@ Result<GpuScene> upload_scene(Renderer::Impl& r, const Scene& scene, const gpu::
   g.draw_ubo = make_ubo(gl, draws.data(), draws.size());
   gl.BindBufferBase(GL_UNIFORM_BUFFER, 0, g.frame_ubo.id());
   gl.BindBufferBase(GL_UNIFORM_BUFFER, 1, g.light_ubo.id());
-  if (auto e = check_gl(gl, "uploading uniform blocks"); !e) return e.error();
-  return g;
+  return check_gl(gl, "uploading uniform blocks");
 }
 
 void draw_instance(Renderer::Impl& r, const GpuScene& g, const Scene& scene, std::size_t i, bool depth_only) {

@@ -2,10 +2,13 @@
 // resolve, float readback.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
+#include <filesystem>
 
 #include <fmt/format.h>
 
+#include "shading/animation.hpp"
 #include "shading/renderer_impl.hpp"
 #include "shading/shaders.hpp"
 #include "shading/shadows.hpp"
@@ -382,6 +385,10 @@ void warn_about_range(const FrameEnvironment& env, const Scene& scene, const Ren
 Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& settings) {
   if (auto r = check_settings(settings); !r) return r.error();
   if (auto r = validate(scene); !r) return r.error();
+  return render_scene(scene, settings, 0);
+}
+
+Result<RenderResult> Renderer::render_scene(Scene& scene, const RenderSettings& settings, std::uint64_t scene_id) {
   RenderResult out;
   out.scene_name = scene.name;
   out.warnings = scene.warnings;
@@ -439,8 +446,17 @@ Result<RenderResult> Renderer::render(Scene scene, const RenderSettings& setting
     if (auto e = ensure_shadow_map(r, settings.shadow_map_size); !e) return e.error();
 
   const auto t0 = Clock::now();
-  auto g = upload_scene(r, scene, frame, light_block(scene, shadow_index));
-  if (!g) return g.error();
+  // A scene loaded for an earlier frame keeps its meshes and textures on the GPU; only
+  // the frame's uniform blocks (camera, lights, instance transforms) are new.
+  GpuScene local;
+  GpuScene* g = scene_id != 0 ? &r.gpu_scene : &local;
+  if (scene_id == 0 || r.gpu_scene_id != scene_id) {
+    r.gpu_scene = GpuScene{};
+    r.gpu_scene_id = 0;
+    if (auto e = upload_geometry(r, scene, *g); !e) return e.error();
+    r.gpu_scene_id = scene_id;
+  }
+  if (auto e = upload_blocks(r, scene, frame, light_block(scene, shadow_index), *g); !e) return e.error();
   if (shadow_index >= 0) shadow_pass(r, *g, scene);
   bind_environment(r, env->gpu);
   lit_pass(r, *g, scene, out.camera, background, environment_background);
@@ -526,6 +542,31 @@ Result<Image> Renderer::read_frame() {
 }
 
 namespace {
+
+// What identifies a loaded scene: its source (a file by path, size and modification time,
+// so an edited file is loaded again; JSON text as written) and every load option.
+std::string scene_cache_key(const RenderRequest& request, const SceneLoadOptions& load) {
+  std::string source;
+  if (request.scene_json) {
+    source = "json:" + request.scene_json->dump();
+  } else {
+    const std::string name = request.scene.empty() ? default_scene_name() : request.scene;
+    source = "scene:" + name;
+    if (!is_builtin_scene(name)) {
+      const std::filesystem::path given(name);
+      const std::filesystem::path path = given.is_absolute() ? given : load.base_dir / given;
+      std::error_code ec;
+      const auto size = std::filesystem::file_size(path, ec);
+      const auto mtime = std::filesystem::last_write_time(path, ec);
+      source += fmt::format(":{}:{}", ec ? 0 : size, ec ? 0 : mtime.time_since_epoch().count());
+    }
+  }
+  const SceneLimits& l = load.limits;
+  return fmt::format("{}|{}|{}|{}|{}|{},{},{},{},{},{}", source, load.base_dir.string(), load.allow_files,
+                     load.gltf_emissive_nits, load.default_rig, l.max_lights, l.max_triangles, l.max_instances,
+                     l.max_materials, l.max_textures, l.max_texture_bytes);
+}
+
 bool backend_matches(Backend want, const std::string& have) {
   switch (want) {
     case Backend::automatic: return true;
@@ -555,18 +596,75 @@ Result<RenderResult> Renderer::render(const RenderRequest& request) {
   if (auto r = check_settings(settings); !r) return r.error();  // before any loading work
   if (request.environment)
     if (auto r = validate_environment_spec(*request.environment); !r) return r.error();
+  if (!std::isfinite(request.time_s) || std::abs(request.time_s) > 1e9 ||
+      (request.previous_time_s && !std::isfinite(*request.previous_time_s)))
+    return make_error("render.time_s", fmt::format("time_s {} is not a finite time in seconds", request.time_s), "time_s");
   SceneLoadOptions load = request.load;
   if (request.environment) load.default_rig = false;  // the environment lights the model
-  auto scene = request.scene_json ? parse_scene_json(*request.scene_json, load)
-                                  : load_scene(request.scene.empty() ? default_scene_name() : request.scene, load);
-  if (!scene) return scene.error();
+  Impl& r = *impl_;
+  const std::string key = scene_cache_key(request, load);
+  const bool reused = r.scene_cache && r.scene_cache->key == key;
+  double load_ms = 0;
+  if (!reused) {
+    release_scene();
+    const auto t0 = Clock::now();
+    auto scene = request.scene_json ? parse_scene_json(*request.scene_json, load)
+                                    : load_scene(request.scene.empty() ? default_scene_name() : request.scene, load);
+    if (!scene) return scene.error();
+    if (auto v = validate(*scene); !v) return v.error();
+    CachedScene c;
+    c.key = key;
+    c.id = ++r.scene_ids;
+    c.instances = scene->instances;
+    c.lights = scene->lights;
+    c.camera = scene->camera;
+    c.environment = scene->environment;
+    c.ambient_nits = scene->ambient_nits;
+    c.warnings = scene->warnings;
+    c.scene = std::move(*scene);
+    r.scene_cache = std::move(c);
+    ++r.scene_loads;
+    load_ms = ms_since(t0);
+  }
+  CachedScene& cached = *r.scene_cache;
+  cached.restore();
+  Scene& scene = cached.scene;
   if (request.environment) {
     // The request's environment replaces the scene's, its sun included (the sky's sun is
     // added at render time, never stored in the scene's lights).
-    scene->environment = request.environment;
-    scene->ambient_nits.reset();
+    scene.environment = request.environment;
+    scene.ambient_nits.reset();
   }
-  return render(std::move(*scene), settings);
+  AnimatedFrame posed;
+  if (scene.animation) {
+    auto a = animate(scene, *scene.animation, request.time_s, request.previous_time_s);
+    if (!a) return a.error();
+    posed = *a;
+  }
+  auto out = render_scene(scene, settings, cached.id);
+  if (!out) return out;
+  if (const auto& anim = scene.animation) {
+    out->duration_s = anim->duration_s();
+    if (anim->camera) out->cut_times_s = anim->camera->cut_times_s;
+  }
+  out->exposure_ev100 = posed.exposure_ev100;
+  out->exposure_compensation_ev = posed.exposure_compensation_ev;
+  out->scene_cut = posed.scene_cut;
+  out->scene_reused = reused;
+  out->scene_load_ms = load_ms;
+  return out;
 }
+
+void Renderer::release_scene() {
+  Impl& r = *impl_;
+  r.scene_cache.reset();
+  if (r.gpu_scene_id == 0 && r.gpu_scene.meshes.empty()) return;
+  CurrentContext current(*context_);
+  if (!current.status()) return;
+  r.gpu_scene = GpuScene{};
+  r.gpu_scene_id = 0;
+}
+
+std::uint64_t Renderer::scene_loads() const { return impl_->scene_loads; }
 
 }  // namespace hdrd::shading

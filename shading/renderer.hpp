@@ -74,6 +74,12 @@ struct RenderRequest {
   // rendered with an environment gets exactly its own lights plus it (no default rig).
   std::optional<EnvironmentSpec> environment;
   bool energy_compensation = true;
+  // Scene time of the frame, seconds: the scene's animation is sampled here (clamped to
+  // its keys). The same request at the same time gives the identical frame.
+  double time_s = 0;
+  // The frame before in a sequence: a cut keyframe in (previous_time_s, time_s] sets
+  // RenderResult::scene_cut. Unset: only a cut within 1 us before time_s does.
+  std::optional<double> previous_time_s;
 };
 
 struct RenderResult {
@@ -94,6 +100,17 @@ struct RenderResult {
   Camera camera;                         // the camera used
   std::int64_t triangles = 0;
   std::vector<std::string> warnings;
+  // The scene's keyframed exposure at time_s (JSON scenes' "keyframes.exposure"); unset
+  // when the scene has none.
+  std::optional<double> exposure_ev100;
+  std::optional<double> exposure_compensation_ev;
+  double duration_s = 0;      // the scene's animation length: its last key time (0: a still scene)
+  bool scene_cut = false;     // a camera keyframe marked "cut" lies at this frame (see previous_time_s)
+  std::vector<double> cut_times_s;  // every cut keyframe's time
+  // Scene reuse: false when this frame loaded (parsed, built, uploaded) the scene, true
+  // when it reused the one loaded for an earlier frame; scene_load_ms: that loading.
+  bool scene_reused = false;
+  double scene_load_ms = 0;
 };
 
 class Renderer {
@@ -119,6 +136,11 @@ class Renderer {
   // otherwise stay resident until a frame of another size.
   void release_frame_targets();
 
+  // Frees the scene kept for the next frame (CPU copy and GPU meshes and textures).
+  void release_scene();
+  // How many times render(RenderRequest) has loaded a scene (not counting reuse).
+  std::uint64_t scene_loads() const;
+
   const GlContext& context() const { return *context_; }
   std::string backend_name() const { return context_->backend_name(); }
 
@@ -128,6 +150,9 @@ class Renderer {
 
  private:
   Renderer(std::unique_ptr<GlContext> c, std::unique_ptr<Impl> impl);
+  // Renders a validated scene in place (it gets the camera used and the sky's sun);
+  // scene_id != 0: its meshes and textures may be reused from the frame before.
+  Result<RenderResult> render_scene(Scene& scene, const RenderSettings& settings, std::uint64_t scene_id);
   std::unique_ptr<GlContext> context_;
   std::unique_ptr<Impl> impl_;
 };

@@ -24,7 +24,8 @@ struct GpuMesh {
   GLsizei index_count = 0;
 };
 
-// A scene on the GPU for one frame.
+// A scene on the GPU: meshes and textures (kept between frames of the same loaded scene)
+// and the uniform blocks of one frame.
 struct GpuScene {
   std::vector<GpuMesh> meshes;
   std::map<int, GlName> textures;  // key: texture index * 2 + (sRGB ? 1 : 0)
@@ -42,6 +43,28 @@ struct GpuEnvironment {
   GlName specular;                 // GGX-prefiltered cube map, roughness = LOD / (levels - 1)
   int specular_levels = 0;
   GlName irradiance;               // irradiance cube map, lux
+};
+
+// The last scene loaded by render(RenderRequest), in its rest pose, and what a frame
+// changes in it (posing, the sky's sun, the request's environment), restored each frame.
+struct CachedScene {
+  std::string key;  // scene_cache_key(): the source (and a file's size and mtime) and the load options
+  std::uint64_t id = 0;
+  Scene scene;
+  std::vector<Instance> instances;
+  std::vector<Light> lights;
+  std::optional<Camera> camera;
+  std::optional<EnvironmentSpec> environment;
+  std::optional<Vec3> ambient_nits;
+  std::vector<std::string> warnings;
+  void restore() {
+    scene.instances = instances;
+    scene.lights = lights;
+    scene.camera = camera;
+    scene.environment = environment;
+    scene.ambient_nits = ambient_nits;
+    scene.warnings = warnings;
+  }
 };
 
 struct Renderer::Impl {
@@ -62,6 +85,12 @@ struct Renderer::Impl {
   // Environment light (ibl.cpp).
   GlName background_program, cube_program, prefilter_program;
   std::optional<GpuEnvironment> environment;
+  // Scene reuse between frames (render(RenderRequest)): the loaded scene and its
+  // geometry on the GPU (gpu_scene_id: the CachedScene::id it holds; 0: none).
+  std::optional<CachedScene> scene_cache;
+  std::uint64_t scene_ids = 0, scene_loads = 0;
+  GpuScene gpu_scene;
+  std::uint64_t gpu_scene_id = 0;
 };
 
 // ibl.cpp: programs at start-up; an environment's textures (built, or the cached ones
@@ -71,9 +100,10 @@ Result<const GpuEnvironment*> prepare_environment(Renderer::Impl& r, const Envir
 void bind_environment(Renderer::Impl& r, const GpuEnvironment* env);
 void background_pass(Renderer::Impl& r);
 
-// gpu_scene.cpp
-Result<GpuScene> upload_scene(Renderer::Impl& r, const Scene& scene, const gpu::FrameBlock& frame,
-                              const gpu::LightBlock& lights);
+// gpu_scene.cpp: a scene's meshes and textures; a frame's uniform blocks (bound).
+Result<void> upload_geometry(Renderer::Impl& r, const Scene& scene, GpuScene& g);
+Result<void> upload_blocks(Renderer::Impl& r, const Scene& scene, const gpu::FrameBlock& frame,
+                           const gpu::LightBlock& lights, GpuScene& g);
 // Binds textures and the draw block of instance i, and draws it.
 void draw_instance(Renderer::Impl& r, const GpuScene& g, const Scene& scene, std::size_t i, bool depth_only);
 

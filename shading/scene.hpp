@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@
 #include "shading/math.hpp"
 
 namespace hdrd::shading {
+
+struct SceneAnimation;  // animation.hpp
 
 struct Vertex {
   std::array<float, 3> position{};
@@ -116,6 +119,9 @@ struct Scene {
   std::optional<Vec3> background_nits;  // what the camera sees behind everything (default: environment, ambient or 0)
   double medium_ior = 1.0;              // 1 = air, 1.33 = water
   std::vector<std::string> warnings;
+  // Keyframes (glTF animations, JSON keyframes, a built-in's motion); none: a still scene.
+  // The scene as stored is the rest pose; animate() (animation.hpp) poses it at a time.
+  std::shared_ptr<const SceneAnimation> animation;
 };
 
 struct SceneLimits {

@@ -1,11 +1,13 @@
 // The hdrd JSON scene format (docs/scene-format.md). Strict: every problem is an error
 // naming its field, and nothing is allocated from a count before the count is checked.
+#include <algorithm>
 #include <map>
 #include <set>
 
 #include <fmt/format.h>
 
 #include "encode/io/json_text.hpp"
+#include "shading/animation.hpp"
 #include "shading/gltf_internal.hpp"
 #include "shading/materials.hpp"
 #include "shading/scene_loader.hpp"
@@ -345,6 +347,8 @@ void append_scene(Scene& dst, Scene src, const Mat4& transform, bool lights, boo
     dst.camera = c;
   }
   for (auto& w : src.warnings) dst.warnings.push_back(std::move(w));
+  if (src.animation)
+    dst.warnings.push_back("the animations of an imported glTF file are not played (render the .gltf itself to animate it)");
 }
 
 void import_gltf_object(Reader& r, const json& j, const std::string& p, const Mat4& transform, Scene& s,
@@ -429,9 +433,180 @@ void read_environment(Reader& r, const json& j, Scene& s, const SceneLoadOptions
   s.environment = std::move(e);
 }
 
+// ---- Keyframes (docs/scene-format.md "Keyframes") -----------------------------------------------
+constexpr std::size_t kMaxKeys = 100'000;
+
+// A key list: [ {"t": ...}, ... ] (linear) or {"interpolation": "...", "keys": [...]} (plus
+// `extra` keys of the wrapper, e.g. "light"). Null when absent or failed.
+const json* read_key_list(Reader& r, const json& j, const std::string& p, Interpolation& interp,
+                          std::vector<std::string_view> wrapper_keys = {}) {
+  interp = Interpolation::linear;
+  if (j.is_array() && wrapper_keys.empty()) {
+    if (j.size() > kMaxKeys) return r.fail(p, fmt::format("{} keys exceed the limit of {}", j.size(), kMaxKeys)), nullptr;
+    return &j;
+  }
+  wrapper_keys.insert(wrapper_keys.end(), {"interpolation", "keys"});
+  if (!r.object(j, p, wrapper_keys)) return nullptr;
+  const std::string name = r.string(j, p, "interpolation", "linear");
+  if (name == "linear") interp = Interpolation::linear;
+  else if (name == "step") interp = Interpolation::step;
+  else if (name == "smooth") interp = Interpolation::smooth;
+  else if (!r.failed()) return r.fail(p + ".interpolation", fmt::format("'{}' is not linear, step or smooth", name)), nullptr;
+  const json* keys = r.array(j, p, "keys", kMaxKeys);
+  if (!keys && !r.failed()) r.fail(p + ".keys", "missing");
+  return keys;
+}
+
+// The keys' times: present, >= 0, strictly increasing.
+std::vector<double> read_key_times(Reader& r, const json& keys, const std::string& p) {
+  std::vector<double> times;
+  if (keys.empty()) return r.fail(p, "has no keys"), times;
+  for (std::size_t k = 0; k < keys.size() && !r.failed(); ++k) {
+    const std::string kp = fmt::format("{}[{}]", p, k);
+    if (!keys[k].is_object()) return r.fail(kp, "must be an object"), times;
+    if (!keys[k].contains("t")) return r.fail(kp + ".t", "missing (the key's time in seconds)"), times;
+    const double t = r.number(keys[k], kp, "t", 0, 0, kBig);
+    if (!times.empty() && !(t > times.back()))
+      r.fail(kp + ".t", fmt::format("{} s must be later than the key before ({} s)", t, times.back()));
+    times.push_back(t);
+  }
+  return times;
+}
+
+// Appends one key of `components` values to a per-field track (built on its first key).
+void add_key(std::optional<Track>& track, Interpolation interp, int components, double t, const double* v) {
+  if (!track) {
+    track.emplace();
+    track->interpolation = interp;
+    track->components = components;
+  }
+  track->times_s.push_back(t);
+  track->values.insert(track->values.end(), v, v + components);
+}
+void add_vec3(std::optional<Track>& track, Interpolation interp, double t, std::optional<Vec3> v) {
+  if (!v) return;
+  const double c[3] = {v->x, v->y, v->z};
+  add_key(track, interp, 3, t, c);
+}
+void add_scalar(std::optional<Track>& track, Interpolation interp, double t, std::optional<double> v) {
+  if (v) add_key(track, interp, 1, t, &*v);
+}
+
+// A cut key holds, on every camera track with a key at the cut, the segment before it.
+void hold_before(std::optional<Track>& track, double cut_s) {
+  if (!track) return;
+  const auto it = std::find(track->times_s.begin(), track->times_s.end(), cut_s);
+  if (it != track->times_s.end() && it != track->times_s.begin())
+    track->cut_keys.push_back(static_cast<std::size_t>(it - track->times_s.begin()));
+}
+
+void read_camera_keys(Reader& r, const json& j, SceneAnimation& a) {
+  const std::string p = "keyframes.camera";
+  Interpolation interp;
+  const json* keys = read_key_list(r, j, p, interp);
+  if (!keys) return;
+  const std::vector<double> times = read_key_times(r, *keys, p);
+  CameraAnimation c;
+  for (std::size_t k = 0; k < times.size() && !r.failed(); ++k) {
+    const json& key = (*keys)[k];
+    const std::string kp = fmt::format("{}[{}]", p, k);
+    if (!r.object(key, kp, {"t", "position", "target", "yaw_deg", "pitch_deg", "yfov_deg", "cut"})) return;
+    add_vec3(c.position, interp, times[k], r.opt_vec3(key, kp, "position", -kBig, kBig));
+    add_vec3(c.target, interp, times[k], r.opt_vec3(key, kp, "target", -kBig, kBig));
+    add_scalar(c.yfov_deg, interp, times[k], r.opt_number(key, kp, "yfov_deg", 0.01, 179.9));
+    const auto yaw = r.opt_number(key, kp, "yaw_deg", -3600, 3600), pitch = r.opt_number(key, kp, "pitch_deg", -89.9, 89.9);
+    if (yaw.has_value() != pitch.has_value()) return r.fail(kp + (yaw ? ".pitch_deg" : ".yaw_deg"), "missing (yaw_deg and pitch_deg come together)");
+    if (yaw) {
+      const double yp[2] = {*yaw, *pitch};
+      add_key(c.yaw_pitch_deg, interp, 2, times[k], yp);
+    }
+    if (r.boolean(key, kp, "cut", false)) c.cut_times_s.push_back(times[k]);
+  }
+  if (r.failed()) return;
+  if (c.target && c.yaw_pitch_deg) return r.fail(p, "keys give both target and yaw_deg/pitch_deg: use one of them");
+  for (double cut : c.cut_times_s)
+    for (auto* t : {&c.position, &c.target, &c.yfov_deg, &c.yaw_pitch_deg}) hold_before(*t, cut);
+  a.camera = std::move(c);
+}
+
+int find_light(Reader& r, const json& j, const std::string& p, const Scene& s) {
+  const auto it = j.find("light");
+  if (it == j.end()) return r.fail(p + ".light", "missing (a light's index or name)"), -1;
+  if (it->is_number_integer() && it->get<std::int64_t>() >= 0) {
+    const auto i = it->get<std::uint64_t>();
+    if (i >= s.lights.size()) return r.fail(p + ".light", fmt::format("light {} does not exist ({} lights)", i, s.lights.size())), -1;
+    return static_cast<int>(i);
+  }
+  if (!it->is_string()) return r.fail(p + ".light", "must be a light's index or name"), -1;
+  int found = -1;
+  for (std::size_t i = 0; i < s.lights.size(); ++i)
+    if (s.lights[i].name == it->get<std::string>()) {
+      if (found >= 0) return r.fail(p + ".light", fmt::format("'{}' names more than one light", it->get<std::string>())), -1;
+      found = static_cast<int>(i);
+    }
+  if (found < 0) r.fail(p + ".light", fmt::format("no light is named '{}'", it->get<std::string>()));
+  return found;
+}
+
+void read_light_keys(Reader& r, const json& j, const std::string& p, const Scene& s, SceneAnimation& a) {
+  if (!j.is_object()) return r.fail(p, "must be an object with \"light\" and \"keys\"");
+  Interpolation interp;
+  const json* keys = read_key_list(r, j, p, interp, {"light"});
+  const int index = find_light(r, j, p, s);
+  if (!keys || r.failed()) return;
+  const Light& light = s.lights[static_cast<std::size_t>(index)];
+  const bool directional = light.type == LightType::directional;
+  const char* amount = directional ? "illuminance_lux" : "intensity_cd";
+  const std::vector<double> times = read_key_times(r, *keys, p + ".keys");
+  LightAnimation la;
+  la.light = index;
+  for (std::size_t k = 0; k < times.size() && !r.failed(); ++k) {
+    const json& key = (*keys)[k];
+    const std::string kp = fmt::format("{}.keys[{}]", p, k);
+    std::vector<std::string_view> allowed{"t", amount, "color"};
+    if (!directional) allowed.push_back("position");
+    if (!r.object(key, kp, allowed)) return;
+    add_scalar(la.amount, interp, times[k], r.opt_number(key, kp, amount, 0, kBig));
+    add_vec3(la.color, interp, times[k], r.opt_vec3(key, kp, "color", 0, kBig, true));
+    add_vec3(la.position, interp, times[k], r.opt_vec3(key, kp, "position", -kBig, kBig));
+  }
+  a.lights.push_back(std::move(la));
+}
+
+void read_exposure_keys(Reader& r, const json& j, SceneAnimation& a) {
+  const std::string p = "keyframes.exposure";
+  Interpolation interp;
+  const json* keys = read_key_list(r, j, p, interp);
+  if (!keys) return;
+  const std::vector<double> times = read_key_times(r, *keys, p);
+  for (std::size_t k = 0; k < times.size() && !r.failed(); ++k) {
+    const json& key = (*keys)[k];
+    const std::string kp = fmt::format("{}[{}]", p, k);
+    if (!r.object(key, kp, {"t", "ev100", "compensation_ev"})) return;
+    add_scalar(a.exposure_ev100, interp, times[k], r.opt_number(key, kp, "ev100", -20, 30));
+    add_scalar(a.exposure_compensation_ev, interp, times[k], r.opt_number(key, kp, "compensation_ev", -20, 20));
+  }
+}
+
+void read_keyframes(Reader& r, const json& j, Scene& s) {
+  const std::string p = "keyframes";
+  if (!r.object(j, p, {"camera", "lights", "exposure"})) return;
+  SceneAnimation a;
+  if (j.contains("camera")) read_camera_keys(r, j["camera"], a);
+  if (const json* lights = r.array(j, p, "lights", static_cast<std::size_t>(SceneLimits{}.max_lights) * 4))
+    for (std::size_t i = 0; i < lights->size() && !r.failed(); ++i)
+      read_light_keys(r, (*lights)[i], fmt::format("keyframes.lights[{}]", i), s, a);
+  if (j.contains("exposure")) read_exposure_keys(r, j["exposure"], a);
+  if (r.failed()) return;
+  for (const std::optional<Track>* t : {&a.exposure_ev100, &a.exposure_compensation_ev})
+    if (*t)
+      if (auto v = validate_track(**t, p, "scene.json"); !v) return r.fail(p, v.error().message);
+  if (!a.empty()) s.animation = std::make_shared<SceneAnimation>(std::move(a));
+}
+
 void read_scene(Reader& r, const json& doc, Scene& s, const SceneLoadOptions& options) {
   if (!r.object(doc, "", {"hdrd_scene", "name", "camera", "medium_ior", "ambient_nits", "background_nits",
-                          "environment", "materials", "lights", "objects"}))
+                          "environment", "materials", "lights", "objects", "keyframes"}))
     return;
   if (!doc.contains("hdrd_scene")) return r.fail("hdrd_scene", fmt::format("missing (must be {})", kFormatVersion));
   if (r.number(doc, "", "hdrd_scene", 0, kFormatVersion, kFormatVersion) != kFormatVersion) return;
@@ -455,6 +630,7 @@ void read_scene(Reader& r, const json& doc, Scene& s, const SceneLoadOptions& op
     for (std::size_t i = 0; i < lights->size() && !r.failed(); ++i)
       s.lights.push_back(read_light(r, (*lights)[i], fmt::format("lights[{}]", i)));
   read_objects(r, doc, s, names, options);
+  if (doc.contains("keyframes") && !r.failed()) read_keyframes(r, doc["keyframes"], s);
 }
 
 }  // namespace

@@ -38,6 +38,9 @@ std::string default_scene_name();  // "material-grid"
 std::vector<std::string> builtin_scene_names();
 bool is_builtin_scene(std::string_view name);
 Result<Scene> make_builtin_scene(std::string_view name);
+// The built-in scenes are still except "hdr": its camera walks from the dark interior
+// (t = 0) out through the door into the sunlit yard, arriving at this time.
+inline constexpr double kHdrWalkOutSeconds = 6.0;
 
 // ---- JSON scenes ---------------------------------------------------------------------------
 inline constexpr std::size_t kMaxSceneJsonBytes = 256u << 20;  // a scene file or text, at most

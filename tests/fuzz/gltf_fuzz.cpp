@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 
+#include "shading/animation.hpp"
 #include "shading/scene_loader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -12,6 +13,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.allow_files = false;
   options.limits.max_triangles = 2'000'000;
   auto scene = hdrd::shading::load_gltf_memory(std::span<const std::uint8_t>(data, size), "", options);
-  (void)scene;
+  // Animations are posed at their start, middle, end and beyond (clamping).
+  if (scene && scene->animation) {
+    const double end = scene->animation->duration_s();
+    for (double t : {-1.0, 0.0, end * 0.37, end, end + 1e6}) (void)hdrd::shading::animate(*scene, *scene->animation, t);
+  }
   return 0;
 }
