@@ -393,9 +393,9 @@ Vec3 input_pixel(const SceneInput& in, std::size_t i) {
 
 }  // namespace
 
-std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits) {
+std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits, std::size_t max_samples) {
   const std::size_t n = in.image ? in.image->pixel_count() : in.half->pixel_count();
-  const std::size_t step = std::max<std::size_t>(1, n / (1u << 21));  // at most ~2 Mpx
+  const std::size_t step = std::max<std::size_t>(1, n / std::max<std::size_t>(1, max_samples));  // ~max_samples
   const Vec3 luma{color::kRec2020Luma.x * in.to_working.m[0][0] + color::kRec2020Luma.y * in.to_working.m[1][0] +
                       color::kRec2020Luma.z * in.to_working.m[2][0],
                   color::kRec2020Luma.x * in.to_working.m[0][1] + color::kRec2020Luma.y * in.to_working.m[1][1] +

@@ -93,7 +93,7 @@ Result<PreparedPipeline> prepare_pipeline(const SceneInput& input, const EncodeS
 
 // Scene luminance in cd/m2 of (a subsample of, at most ~2 Mpx) the input: what the
 // auto-exposure modes meter and a sequence's temporal decisions read (encode/tone/temporal.hpp).
-std::vector<float> scene_luminance_nits(const SceneInput& input, double unit_nits);
+std::vector<float> scene_luminance_nits(const SceneInput& input, double unit_nits, std::size_t max_samples = 1u << 21);
 
 // A sequence's decisions for one frame, applied to its prepared pipeline: the exposure
 // scale (cd/m2 -> relative, what exposure::meter returns; the sidecar's exposure.scale) and

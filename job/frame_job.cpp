@@ -242,17 +242,30 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
                     {"triangles", r->triangles},
                     {"environment", r->environment},
                     {"environment_ms", r->environment_ms},
-                    {"energy_compensation", rq.energy_compensation}};
+                    {"energy_compensation", rq.energy_compensation},
+                    {"time_s", rq.time_s},
+                    {"duration_s", r->duration_s}};
+  if (r->scene_cut) st.render_info["scene_cut"] = true;
+  if (r->exposure_ev100) st.render_info["keyframed_ev100"] = *r->exposure_ev100;
+  if (r->exposure_compensation_ev) st.render_info["keyframed_compensation_ev"] = *r->exposure_compensation_ev;
 
   SceneInput meter;
   meter.image = &r->metering_nits;
   meter.units = InputUnits::absolute;
   if (r->dominant_illuminance_lux > 0) meter.illuminance_lux = r->dominant_illuminance_lux;
   settings->exposure.mode = exposure_mode(st.request, r->dominant_illuminance_lux > 0);
+  // A scene's keyframed exposure (docs/scene-format.md "Keyframes"): its EV100 is the camera
+  // exposure where the request leaves the mode to the rule and gives no EV100 of its own;
+  // its compensation adds to the request's.
+  if (r->exposure_ev100 && st.request.text("exposure.mode") == "auto" && st.request.is_null("exposure.ev100")) {
+    settings->exposure.mode = exposure::Mode::camera;
+    settings->exposure.ev100 = *r->exposure_ev100;
+  }
+  if (r->exposure_compensation_ev) settings->exposure.compensation_ev += *r->exposure_compensation_ev;
   auto prepared = prepare_pipeline(meter, *settings);
   if (!prepared) return prepared.error();
   if (st.options.temporal)
-    if (auto ok = st.options.temporal(meter, *prepared); !ok) return ok.error();
+    if (auto ok = st.options.temporal(meter, *prepared, {r->scene_cut, r->duration_s}); !ok) return ok.error();
   st.settings = std::move(*settings);
   if (st.stopped()) return cancelled();
 
@@ -351,7 +364,7 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   auto prepared = prepare_pipeline(in, *settings);
   if (!prepared) return prepared.error();
   if (st.options.temporal)
-    if (auto ok = st.options.temporal(in, *prepared); !ok) return ok.error();
+    if (auto ok = st.options.temporal(in, *prepared, {}); !ok) return ok.error();
   auto f = encode_prepared(in, *prepared);
   if (!f) return f.error();
   st.timings["encode"] = ms_since(t1);

@@ -32,6 +32,12 @@ class Renderer;
 
 namespace hdrd::job {
 
+// What the source says about the frame's place in time (a render's scene animation).
+struct FrameFacts {
+  bool scene_cut = false;  // the scene keys a cut at this frame
+  double duration_s = 0;   // the scene's animation length (0: a still scene)
+};
+
 // What the front end provides beyond the request.
 struct JobOptions {
   int threads = 0;                          // encoder threads (0: all cores)
@@ -44,8 +50,9 @@ struct JobOptions {
   // Sequences (job/sequence.cpp): the scene time of a render, and the per-frame decisions
   // taken once the frame is metered and its pipeline prepared, before it is encoded (the
   // exposure scale, the source peak: encode/pipeline.hpp set_exposure_scale/set_source_peak).
-  double time_s = 0;
-  std::function<Result<void>(const SceneInput& metered, PreparedPipeline& prepared)> temporal;
+  std::optional<double> time_s;              // a sequence's frame time; unset: the request's start_s
+  std::optional<double> previous_time_s;     // the frame before's: a scene cut keyed between the two marks this one
+  std::function<Result<void>(const SceneInput& metered, PreparedPipeline& prepared, const FrameFacts& facts)> temporal;
 };
 
 // The EXR of an encode request: a file (CLI) or the uploaded bytes (daemon).

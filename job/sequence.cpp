@@ -275,6 +275,7 @@ struct FrameItem {
   double time_s = 0;
   temporal::FrameDecision decision;
   std::optional<double> source_peak_nits;  // when the curve took the detected peak
+  double duration_s = 0;                   // the scene's animation (a render)
   std::string input;                       // an encode's EXR
   FrameResult result;
 };
@@ -478,6 +479,7 @@ class SequenceSink {
 
   // A shard's scene numbers continue the sequence's: `scenes` started before its first frame.
   void set_scenes_before(int scenes) { scene_ = scenes - 1; }
+  void set_total(int total) { total_ = total; }  // before the first frame is consumed
 
   Result<SequenceResult> finish(double fps) {
     if (!metadata_) return make_error("internal", "a sequence finished without frames");
@@ -581,6 +583,7 @@ Result<std::vector<Output>> frame_outputs(const FrameRequest& r, Mode mode, bool
 // Where the frames come from: a render's times or an encode's files.
 struct FrameSource {
   int total = 1;
+  bool total_from_scene = false;  // a render without `frames`: the animation's length, known at frame 0
   double fps = 24, start_s = 0;
   std::vector<fs::path> inputs;  // encode
 };
@@ -603,9 +606,22 @@ Result<FrameSource> frame_source(const FrameRequest& request) {
     src.inputs = std::move(*files);
   } else {
     src.start_s = request.number("start_s");
+    src.total_from_scene = request.is_null("frames");
   }
   return src;
 }
+
+// A render without `frames` covers the scene's animation, its first and last key included
+// (a still scene: one frame).
+int frames_of_animation(double duration_s, double fps) {
+  if (!(duration_s > 0) || !std::isfinite(duration_s)) return 1;
+  return static_cast<int>(std::min(1e6, std::round(duration_s * fps) + 1));
+}
+
+// The statistics a cut and the peak are decided on, when the exposure did not meter the
+// frame itself (manual, camera, light): a coarser subsample than metering's ~2 Mpx, as
+// cheap as the decisions need (the 99.99th percentile still rests on ~26 samples).
+constexpr std::size_t kTemporalSamples = 1u << 18;
 
 // A sentinel: the analysis stops a frame job once the frame is decided.
 constexpr const char* kAnalysed = "sequence.analysed";
@@ -623,15 +639,17 @@ struct FrameLoop {
   std::vector<temporal::FrameDecision>* decided = nullptr;      // analysis: the decisions
 };
 
-Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in, PreparedPipeline& p) {
+Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in, PreparedPipeline& p,
+                    const FrameFacts& facts) {
+  item.duration_s = facts.duration_s;
   temporal::FrameDecision d;
   if (loop.track) {
     d = (*loop.track)[static_cast<std::size_t>(item.index)];
   } else {
     // The samples the exposure metered, when it read the image (the same ones, once).
     std::shared_ptr<const std::vector<float>> lum = p.luminance_nits;
-    if (!lum) lum = std::make_shared<const std::vector<float>>(scene_luminance_nits(in, p.unit_nits));
-    auto next = loop.tone->next_metered(*lum, p.metering.scale, 1.0 / loop.src.fps);
+    if (!lum) lum = std::make_shared<const std::vector<float>>(scene_luminance_nits(in, p.unit_nits, kTemporalSamples));
+    auto next = loop.tone->next_metered(*lum, p.metering.scale, 1.0 / loop.src.fps, facts.scene_cut);
     if (!next) return next.error();
     d = *next;
   }
@@ -653,10 +671,12 @@ Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in
   return {};
 }
 
+// Runs the frames; `on_total` hears the frame count once frame 0 has told it (a render
+// without `frames`).
 template <class Sink>
 Result<void> run_frames(const FrameLoop& loop, int first, int count, std::optional<std::vector<Output>> outputs,
                         Sink&& start_sink, BoundedQueue<FrameItem>& queue, const std::function<bool()>& failed,
-                        const std::function<void(Error)>& fail) {
+                        const std::function<void(int)>& on_total) {
   const double dt = 1.0 / loop.src.fps;
   for (int i = first; i < first + count && !failed(); ++i) {
     if (loop.options.job.should_stop && loop.options.job.should_stop()) return make_error("request.cancelled", "cancelled");
@@ -665,7 +685,10 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
     item.time_s = loop.src.start_s + i * dt;
     JobOptions jo = loop.options.job;
     jo.time_s = item.time_s;
-    jo.temporal = [&](const SceneInput& in, PreparedPipeline& p) { return decide(loop, item, in, p); };
+    if (i > 0) jo.previous_time_s = item.time_s - dt;
+    jo.temporal = [&](const SceneInput& in, PreparedPipeline& p, const FrameFacts& facts) {
+      return decide(loop, item, in, p, facts);
+    };
     EncodeInput input;
     if (loop.request.source == Source::encode) {
       input.path = loop.src.inputs[static_cast<std::size_t>(i)];
@@ -683,12 +706,16 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
       start_sink();
     }
     auto result = run_frame_job(**job, loop.renderer);
-    if (!result && result.error().code == kAnalysed) continue;
-    if (!result) {
+    if (!result && result.error().code != kAnalysed) {
       Error e = result.error();
       e.message = where + e.message;
       return e;
     }
+    if (i == 0 && loop.src.total_from_scene) {
+      count = frames_of_animation(item.duration_s, loop.src.fps);
+      on_total(count);
+    }
+    if (!result) continue;  // analysed
     item.result = std::move(*result);
     if (!queue.push(std::move(item))) break;
   }
@@ -705,7 +732,7 @@ Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptio
   auto video = video_settings(request);
   if (!video) return video.error();
   SequenceCheck out;
-  out.frames = src->total;
+  out.frames = src->total_from_scene ? 0 : src->total;
   out.inputs = src->inputs;
   EncodeInput input;
   if (request.source == Source::encode) input.path = src->inputs.front();
@@ -741,8 +768,13 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
   request.at("durable");
   (void)metadata_settings(request);
 
-  int first = 0, count = src->total;
   const ShardSpec* shard = options.shard ? &*options.shard : nullptr;
+  if (shard && src->total_from_scene && shard->track) {  // the plan's analysis counted them
+    src->total = static_cast<int>(shard->track->size());
+    src->total_from_scene = false;
+  }
+  if (src->total_from_scene) src->total = 1000000;  // until frame 0 tells the animation's length
+  int first = 0, count = src->total;
   if (shard) {
     if (!shard->track || static_cast<int>(shard->track->size()) != src->total)
       return make_error("sequence.plan", fmt::format("the plan's track has {} frames, the sequence {}",
@@ -805,7 +837,9 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
       }
     });
   };
-  auto ran = run_frames(loop, first, count, std::nullopt, start_sink, queue, failed, fail);
+  auto ran = run_frames(loop, first, count, std::nullopt, start_sink, queue, failed, [&](int total) {
+    if (sink) sink->set_total(total);
+  });
   if (!ran) fail(ran.error());
   queue.finish();
   if (writer.joinable()) writer.join();

@@ -95,7 +95,7 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const std::file
 // a render's frame size (4:2:0 needs an even size; an encode's size is its EXRs', checked
 // at the first frame). The daemon answers 4xx from it before 202.
 struct SequenceCheck {
-  int frames = 0;
+  int frames = 0;                             // 0: a render's animation decides (known at its frame 0)
   std::vector<std::filesystem::path> inputs;  // an encode's EXR files, `frames` of them
   DisplayTarget target;                       // the first frame's
 };

@@ -365,8 +365,8 @@ std::vector<Setting> make_table() {
        .unit = "1/s", .min = 0.01, .max = 1000, .default_json = "24", .flag = "--fps", .metavar = "F",
        .sequence = true},
       {.path = "start_s", .type = T::number, .sources = kRender,
-       .doc = "Sequences: scene time of the first frame", .unit = "s", .min = -1e6, .max = 1e6, .default_json = "0",
-       .flag = "--start-s", .metavar = "T", .sequence = true},
+       .doc = "Scene time of the frame, or of a sequence's first frame (animated scenes: docs/scene-format.md)",
+       .unit = "s", .min = -1e6, .max = 1e6, .default_json = "0", .flag = "--start-s", .metavar = "T"},
       {.path = "images", .type = T::path, .sources = kEncode,
        .doc = "Sequences: the EXR frames, a printf pattern (shot.%04d.exr), a directory of .exr files or a list "
               "file (one path per line); the CLI takes it as its input",

@@ -355,3 +355,54 @@ TEST(SequenceCheck, RefusesBeforeTheFirstFrame) {
 
 }  // namespace
 }  // namespace hdrd::job
+
+namespace hdrd::job {
+namespace {
+
+// A render sequence of an animated JSON scene (docs/scene-format.md "Keyframes"): without
+// `frames` it covers the animation; the keyframed EV100 is each frame's camera exposure
+// (exactly a single frame's at that time); a keyed camera cut starts a scene.
+TEST(SequenceRender, KeyframedSceneDrivesTimeExposureAndCuts) {
+  testing::TempDir d;
+  const json scene = json::parse(R"({
+    "hdrd_scene": 1,
+    "camera": {"position": [0, 1, 5], "target": [0, 0, 0]},
+    "materials": [{"name": "grey", "base_color": 0.5}],
+    "lights": [{"type": "directional", "direction": [0, -1, -0.3], "illuminance_lux": 1000}],
+    "objects": [{"type": "sphere", "material": "grey", "radius": 1}],
+    "keyframes": {
+      "camera": {"keys": [{"t": 0, "position": [0, 1, 5]}, {"t": 1.5, "position": [3, 1, 5], "cut": true}]},
+      "exposure": [{"t": 0, "ev100": 6}, {"t": 2, "ev100": 10}]
+    }})");
+  const fs::path file = d / "anim.json";
+  std::ofstream(file) << scene.dump();
+  json body = {{"scene", file.string()}, {"width", 24}, {"height", 16}, {"samples", 1}, {"fps", 2}, {"formats", {"raw"}}};
+  auto r = parse_request_json(body, context(Source::render, true));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  auto seq = run_sequence(*r, d / "out", {});
+  if (!seq.ok() && seq.error().code.rfind("render", 0) == 0) GTEST_SKIP() << "no GL renderer: " << seq.error().message;
+  ASSERT_TRUE(seq.ok()) << seq.error().message;
+  const json& frames = seq->sidecar["frames"];
+  ASSERT_EQ(frames.size(), 5u) << "2 s at 2 fps, both ends";
+  EXPECT_DOUBLE_EQ(frames[4]["time_s"].get<double>(), 2.0);
+  // The cut keyed at t = 1.5 starts a scene at frame 3 (t = 1.5).
+  EXPECT_TRUE(frames[3]["scene_start"].get<bool>());
+  EXPECT_EQ(frames[3]["scene"], 1);
+  // EV100 6 -> 10 linearly: frame at t = 1 exposed as a single camera frame at EV100 8.
+  auto single = parse_request_json(json{{"scene", file.string()}, {"width", 24}, {"height", 16}, {"samples", 1},
+                                        {"exposure", {{"ev100", 8}}}, {"formats", {"raw"}}},
+                                   context(Source::render, false));
+  ASSERT_TRUE(single.ok());
+  JobOptions at1;
+  at1.time_s = 1.0;
+  auto job = FrameJob::create(*single, at1);
+  ASSERT_TRUE(job.ok());
+  auto one = run_frame_job(**job);
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  EXPECT_EQ(read_bytes(d / "out.00002.raw"), one->frame.data);
+  EXPECT_LT(frames[4]["exposure_scale"].get<double>(), frames[0]["exposure_scale"].get<double>() / 15)
+      << "4 stops less exposure at EV100 10 than at 6";
+}
+
+}  // namespace
+}  // namespace hdrd::job

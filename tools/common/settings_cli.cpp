@@ -17,6 +17,9 @@ std::string group_of(std::string_view path) {
   if (head == "ui") return "UI overlay";
   if (head == "grade") return "Grading";
   if (head == "params" || head == "pattern") return "Pattern";
+  if (head == "frames" || head == "fps" || head == "start_s" || head == "images" || head == "video" ||
+      head == "metadata" || head == "sequence")
+    return "Sequence";
   if (head == "scene" || head == "width" || head == "height" || head == "samples" || head == "camera" ||
       head == "encoder" || head == "backend" || head == "input")
     return "Source";
