@@ -82,6 +82,15 @@ constexpr StatusEntry kStatus[] = {
     {"video.", 422},
     {"sequence.", 422},
     {"hdr10plus.", 422},
+    {"animation.", 422},   // a scene's animation or keyframes that cannot be sampled
+    {"input.", 422},       // a sequence's frames: no file matches, a frame missing, an empty list
+    {"plan.", 422},        // a sequence plan file that is not one (the cluster client)
+    {"slurm.unknown_job", 404},
+    {"slurm.options", 400},
+    // The cluster engine's side: Slurm or a subprocess failed, not the request.
+    {"slurm.", 502},
+    {"process.timeout", 504},
+    {"process.", 502},
     // The daemon's own faults and missing resources.
     {"io.", 500},
     {"avif.", 500},
