@@ -162,6 +162,7 @@ Result<void> SequencePresenter::start(const EncodedFrame& f) {
   const ContentLightLevel light = options_.content_light.value_or(ContentLightLevel{});
   if (auto s = add_signalling(device_, described, light, route_, options_.present, req, out, blobs_); !s)
     return s.error();
+  if (options_.amend_commit) options_.amend_commit(req, 0);
   if (auto t = device_.atomic_commit(req, kAtomicTestOnly | kAtomicAllowModeset); !t)
     return prefixed(t.error(), fmt::format("{} rejected the configuration in a TEST_ONLY commit", out.device));
   if (auto c = device_.atomic_commit_with_event(req, kAtomicAllowModeset | kAtomicNonblock, ++serial_); !c)
@@ -206,6 +207,7 @@ Result<void> SequencePresenter::show(const EncodedFrame& f, std::uint64_t k) {
 Result<void> SequencePresenter::commit_flip(int buffer, std::optional<std::uint64_t> frame, std::uint32_t due) {
   AtomicRequest req;
   add_flip(route_, buffers_[buffer].fb, req);
+  if (frame && options_.amend_commit) options_.amend_commit(req, frame);
   if (auto c = device_.atomic_commit_with_event(req, kAtomicNonblock, ++serial_); !c)
     return prefixed(c.error(), fmt::format("page flip on {} failed", device_.path()));
   if (frame) buffers_[buffer].state = BufferState::queued;
@@ -325,6 +327,7 @@ void SequencePresenter::shut_down() {
   if (setup_ && setup_->committed) {
     AtomicRequest req;
     add_disable(route_, req);
+    if (options_.amend_commit) options_.amend_commit(req, std::nullopt);
     if (auto off = device_.atomic_commit(req, kAtomicAllowModeset); !off)
       setup_->notes.push_back("turning the display off failed: " + off.error().message);
     setup_->committed = false;

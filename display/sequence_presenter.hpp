@@ -51,6 +51,10 @@ struct SequenceOptions {
   std::optional<ContentLightLevel> content_light;
   std::optional<MasteringDisplay> mastering;
   std::chrono::milliseconds flip_timeout{1000};  // a flip event later than this is an error (kms.flip_timeout)
+  // Adds properties to the modeset (frame 0), to every frame's flip (not to repeats) and
+  // to the turn-off (frame nullopt): the vkms check (tests/display/vkms) attaches a
+  // writeback job to each flipped frame and detaches the writeback connector at the end.
+  std::function<void(kms::AtomicRequest& request, std::optional<std::uint64_t> frame)> amend_commit;
 };
 
 struct SequenceStats {

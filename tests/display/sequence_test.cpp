@@ -240,6 +240,8 @@ struct Cadence {
   std::uint64_t dropped, repeats;
 };
 
+void PrintTo(const Cadence& c, std::ostream* os) { *os << c.name; }  // readable in ctest, not bytes
+
 class PacingCadence : public ::testing::TestWithParam<Cadence> {};
 
 TEST_P(PacingCadence, FramesLandOnTheVblanksOfTheirRate) {
@@ -451,6 +453,26 @@ TEST(SequencePresenter, DestructionWithoutFinishTurnsTheDisplayOff) {
     ASSERT_TRUE(p.push(frame(0)).ok());
     ASSERT_TRUE(p.push(frame(1)).ok());
   }
+  expect_clean(dev);
+}
+
+TEST(SequencePresenter, AmendCommitReachesTheModesetAndEveryFrameFlipOnly) {
+  FakeKmsDevice dev;
+  SequenceOptions o;
+  o.fps = 30;  // repeats in between: not amended
+  std::vector<std::int64_t> amended;  // -1: the turn-off
+  const Properties dpms = *dev.properties(H, kObjectConnector);
+  o.amend_commit = [&](AtomicRequest& r, std::optional<std::uint64_t> k) {
+    amended.push_back(k ? static_cast<std::int64_t>(*k) : -1);
+    r.add(H, dpms, "DPMS", 0);
+  };
+  auto r = run(dev, 4, o);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(amended, (std::vector<std::int64_t>{0, 1, 2, 3, -1}));  // built once for TEST_ONLY and the modeset
+  int with_dpms = 0;
+  for (const auto& c : dev.commits)
+    for (const auto& item : c.items) with_dpms += item.name == "DPMS";
+  EXPECT_EQ(with_dpms, 6);  // TEST_ONLY, modeset, 3 flips, turn-off
   expect_clean(dev);
 }
 
