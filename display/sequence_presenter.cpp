@@ -16,6 +16,7 @@ struct SequencePresenter::Buffer {
   std::span<std::uint8_t> map;
   std::uint32_t fb = 0;
   BufferState state = BufferState::free;
+  std::optional<std::uint64_t> frame;  // the frame it holds
 };
 
 std::optional<Pacing> parse_pacing(std::string_view s) {
@@ -146,6 +147,7 @@ Result<void> SequencePresenter::start(const EncodedFrame& f) {
 
   if (auto b = allocate_buffers(f.drm_fourcc); !b) return b.error();
   copy_frame(f, buffers_[0].dumb, buffers_[0].map);
+  buffers_[0].frame = 0;
   out.fb_id = buffers_[0].fb;
 
   AtomicRequest req;
@@ -176,7 +178,8 @@ Result<void> SequencePresenter::start(const EncodedFrame& f) {
   stats_.refresh_hz = refresh;
   stats_.fps_target = options_.fps > 0 ? options_.fps : refresh;
   frames_per_vblank_ = options_.fps > 0 && refresh > 0 ? options_.fps / refresh : 1.0;
-  return wait_flip();  // sets m0_ from the modeset's vblank
+  // Sets m0_ from the modeset's vblank; a modeset may train a link for a while.
+  return wait_flip(std::max(options_.flip_timeout, std::chrono::milliseconds(5000)));
 }
 
 Result<void> SequencePresenter::show(const EncodedFrame& f, std::uint64_t k) {
@@ -185,7 +188,9 @@ Result<void> SequencePresenter::show(const EncodedFrame& f, std::uint64_t k) {
     if (auto w = wait_flip(); !w) return w;
     b = free_buffer();
   }
+  if (options_.before_reuse && buffers_[b].frame) options_.before_reuse(*buffers_[b].frame);
   copy_frame(f, buffers_[b].dumb, buffers_[b].map);
+  buffers_[b].frame = k;
   if (pending_)  // one commit in flight per CRTC: the next vblank is known once it completed
     if (auto w = wait_flip(); !w) return w;
 
@@ -252,14 +257,16 @@ std::uint32_t SequencePresenter::first_vblank_of(std::uint64_t k) const {
   return m0_ + static_cast<std::uint32_t>(std::ceil(double(k - k0_) / frames_per_vblank_ - 1e-9));
 }
 
-Result<void> SequencePresenter::wait_flip() {
+Result<void> SequencePresenter::wait_flip() { return wait_flip(options_.flip_timeout); }
+
+Result<void> SequencePresenter::wait_flip(std::chrono::milliseconds timeout) {
   if (!pending_) return {};
-  const std::int64_t deadline = device_.now_ns() + std::int64_t(options_.flip_timeout.count()) * 1'000'000;
+  const std::int64_t deadline = device_.now_ns() + std::int64_t(timeout.count()) * 1'000'000;
   for (;;) {
     const std::int64_t left_ms = (deadline - device_.now_ns()) / 1'000'000;
     if (left_ms <= 0)
       return make_error("kms.flip_timeout", fmt::format("no page-flip event from {} within {} ms", device_.path(),
-                                                        options_.flip_timeout.count()));
+                                                        timeout.count()));
     auto events = device_.read_flip_events(std::chrono::milliseconds(std::min<std::int64_t>(left_ms, 100)));
     if (!events) return events.error();
     for (const FlipEvent& e : *events) {

@@ -55,6 +55,11 @@ struct SequenceOptions {
   // to the turn-off (frame nullopt): the vkms check (tests/display/vkms) attaches a
   // writeback job to each flipped frame and detaches the writeback connector at the end.
   std::function<void(kms::AtomicRequest& request, std::optional<std::uint64_t> frame)> amend_commit;
+  // Called before a buffer is written again with the frame it last held, once the flip that
+  // took it off the screen has completed. On vkms the composer that feeds writeback reads
+  // the planes after that flip's event, so the vkms check waits for the frame's writeback
+  // fence here; a display scanning out needs nothing (the event is the release).
+  std::function<void(std::uint64_t frame)> before_reuse;
 };
 
 struct SequenceStats {
@@ -115,6 +120,7 @@ class SequencePresenter {
   Result<void> show(const EncodedFrame& frame, std::uint64_t index);
   Result<void> allocate_buffers(std::uint32_t fourcc);
   Result<void> wait_flip();
+  Result<void> wait_flip(std::chrono::milliseconds timeout);
   Result<void> commit_flip(int buffer, std::optional<std::uint64_t> frame, std::uint32_t due_vblank);
   Result<void> repeat_until(std::uint32_t vblank);
   std::uint32_t next_vblank() const;

@@ -476,6 +476,24 @@ TEST(SequencePresenter, AmendCommitReachesTheModesetAndEveryFrameFlipOnly) {
   expect_clean(dev);
 }
 
+TEST(SequencePresenter, BeforeReuseNamesTheFrameABufferHeld) {
+  for (int buffers : {2, 3}) {
+    FakeKmsDevice dev;
+    SequenceOptions o;
+    o.buffers = buffers;
+    std::vector<std::uint64_t> reused;
+    o.before_reuse = [&](std::uint64_t k) {
+      reused.push_back(k);
+      EXPECT_TRUE(dev.scanouts.size() > 0);
+    };
+    ASSERT_TRUE(run(dev, 6, o).ok());
+    // Each buffer is written again with frame k + buffers after frame k left it.
+    std::vector<std::uint64_t> want;
+    for (std::uint64_t k = 0; k + buffers < 6; ++k) want.push_back(k);
+    EXPECT_EQ(reused, want) << buffers << " buffers";
+  }
+}
+
 TEST(PacingNames, ParsesTheCliSpelling) {
   EXPECT_EQ(parse_pacing("realtime"), Pacing::realtime);
   EXPECT_EQ(parse_pacing("every-frame"), Pacing::every_frame);
