@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -25,6 +26,7 @@ static_assert(kObjectConnector == DRM_MODE_OBJECT_CONNECTOR);
 static_assert(kObjectCrtc == DRM_MODE_OBJECT_CRTC);
 static_assert(kObjectPlane == DRM_MODE_OBJECT_PLANE);
 static_assert(kAtomicTestOnly == DRM_MODE_ATOMIC_TEST_ONLY);
+static_assert(kPageFlipEvent == DRM_MODE_PAGE_FLIP_EVENT);
 static_assert(kAtomicNonblock == DRM_MODE_ATOMIC_NONBLOCK);
 static_assert(kAtomicAllowModeset == DRM_MODE_ATOMIC_ALLOW_MODESET);
 static_assert(kModeTypePreferred == DRM_MODE_TYPE_PREFERRED);
@@ -264,6 +266,15 @@ Result<std::uint32_t> DrmDevice::add_fb2(std::uint32_t width, std::uint32_t heig
 void DrmDevice::remove_fb(std::uint32_t fb_id) { drmModeRmFB(fd_, fb_id); }
 
 Result<void> DrmDevice::atomic_commit(const AtomicRequest& request, std::uint32_t flags) {
+  return commit(request, flags, nullptr);
+}
+
+Result<void> DrmDevice::atomic_commit_with_event(const AtomicRequest& request, std::uint32_t flags,
+                                                 std::uint64_t user_data) {
+  return commit(request, flags | DRM_MODE_PAGE_FLIP_EVENT, reinterpret_cast<void*>(static_cast<std::uintptr_t>(user_data)));
+}
+
+Result<void> DrmDevice::commit(const AtomicRequest& request, std::uint32_t flags, void* user_data) {
   if (request.failed()) return make_error("kms.request", request.error());
   if (!atomic_) return make_error("kms.no_atomic", fmt::format("{} ({}) has no atomic modesetting", path_, driver_));
   drmModeAtomicReq* req = drmModeAtomicAlloc();
@@ -274,16 +285,41 @@ Result<void> DrmDevice::atomic_commit(const AtomicRequest& request, std::uint32_
       return make_error("kms.atomic", fmt::format("cannot add \"{}\" to the atomic request", item.name));
     }
   }
-  const int r = drmModeAtomicCommit(fd_, req, flags, nullptr);
+  const int r = drmModeAtomicCommit(fd_, req, flags, user_data);
   const int err = r < -1 ? -r : errno;
   drmModeAtomicFree(req);
   if (r != 0) {
     Error e = sys_error("atomic commit", err);
-    e.code = "kms.atomic";
+    e.code = err == EBUSY ? "kms.busy" : "kms.atomic";
     e.message = e.message.substr(std::string("atomic commit: ").size());
     return e;
   }
   return {};
+}
+
+namespace {
+thread_local std::vector<FlipEvent>* flip_sink = nullptr;  // drmHandleEvent's handlers get no context
+void on_page_flip(int, unsigned sequence, unsigned sec, unsigned usec, unsigned crtc_id, void* user_data) {
+  if (flip_sink)
+    flip_sink->push_back({static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(user_data)), crtc_id, sequence,
+                          std::int64_t(sec) * 1'000'000'000 + std::int64_t(usec) * 1000});
+}
+}  // namespace
+
+Result<std::vector<FlipEvent>> DrmDevice::read_flip_events(std::chrono::milliseconds timeout) {
+  std::vector<FlipEvent> events;
+  pollfd p{fd_, POLLIN, 0};
+  const int n = poll(&p, 1, static_cast<int>(std::max<std::int64_t>(0, timeout.count())));
+  if (n < 0 && errno != EINTR) return sys_error("poll on " + path_, errno);
+  if (n <= 0) return events;
+  drmEventContext ctx{};
+  ctx.version = 3;  // page_flip_handler2: with the CRTC id
+  ctx.page_flip_handler2 = on_page_flip;
+  flip_sink = &events;
+  const int r = drmHandleEvent(fd_, &ctx);
+  flip_sink = nullptr;
+  if (r != 0) return sys_error("reading DRM events from " + path_, errno);
+  return events;
 }
 
 }  // namespace hdrd::display

@@ -44,9 +44,13 @@ class DrmDevice final : public kms::KmsDevice {
                                 std::uint32_t pitch) override;
   void remove_fb(std::uint32_t fb_id) override;
   Result<void> atomic_commit(const kms::AtomicRequest& request, std::uint32_t flags) override;
+  Result<void> atomic_commit_with_event(const kms::AtomicRequest& request, std::uint32_t flags,
+                                        std::uint64_t user_data) override;
+  Result<std::vector<kms::FlipEvent>> read_flip_events(std::chrono::milliseconds timeout) override;
 
  private:
   DrmDevice(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
+  Result<void> commit(const kms::AtomicRequest& request, std::uint32_t flags, void* user_data);
   int fd_ = -1;
   std::string path_;
   std::string driver_;

@@ -83,7 +83,7 @@ fs::path raw_path(const json& j, const fs::path& sidecar) {
 
 }  // namespace
 
-Result<EncodedFrame> read_dump(const fs::path& sidecar) {
+Result<DumpHeader> read_dump_header(const fs::path& sidecar) {
   auto text = read_binary_file(sidecar, 16 << 20);
   if (!text) return text.error();
   auto parsed = io::parse_json_bounded(std::string_view(reinterpret_cast<const char*>(text->data()), text->size()),
@@ -124,11 +124,18 @@ Result<EncodedFrame> read_dump(const fs::path& sidecar) {
   if (size != need)
     return make_error("dump.raw", fmt::format("{} is {} bytes; the sidecar's {}x{} at stride {} needs {}", raw.string(),
                                               size, f.width, f.height, f.stride_bytes, need), "raw");
-  auto data = read_binary_file(raw, need);
+  return DumpHeader{std::move(f), raw};
+}
+
+Result<EncodedFrame> read_dump(const fs::path& sidecar) {
+  auto header = read_dump_header(sidecar);
+  if (!header) return header.error();
+  EncodedFrame& f = header->frame;
+  auto data = read_binary_file(header->raw, f.stride_bytes * static_cast<std::size_t>(f.height));
   if (!data) return data.error();
   f.data = std::move(*data);
   if (auto c = check_frame(f); !c) return c.error();
-  return f;
+  return std::move(f);
 }
 
 }  // namespace hdrd::display

@@ -18,4 +18,12 @@ namespace hdrd::display {
 
 Result<EncodedFrame> read_dump(const std::filesystem::path& sidecar);
 
+// The sidecar alone (frame.data empty), after checking that the raw file has the size it
+// needs: what a sequence reads of every frame before showing the first.
+struct DumpHeader {
+  EncodedFrame frame;
+  std::filesystem::path raw;
+};
+Result<DumpHeader> read_dump_header(const std::filesystem::path& sidecar);
+
 }  // namespace hdrd::display

@@ -1,8 +1,16 @@
 #include "display/kms.hpp"
 
+#include <time.h>
+
 #include <fmt/format.h>
 
 namespace hdrd::display::kms {
+
+std::int64_t KmsDevice::now_ns() const {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return std::int64_t(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
 
 double ModeInfo::refresh_hz() const {
   const double total = double(htotal) * double(vtotal);

@@ -4,6 +4,7 @@
 // looked up by name, as wlroots does, never hard-coded.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -19,6 +20,7 @@ namespace hdrd::display::kms {
 inline constexpr std::uint32_t kObjectConnector = 0xc0c0c0c0;
 inline constexpr std::uint32_t kObjectCrtc = 0xcccccccc;
 inline constexpr std::uint32_t kObjectPlane = 0xeeeeeeee;
+inline constexpr std::uint32_t kPageFlipEvent = 0x01;
 inline constexpr std::uint32_t kAtomicTestOnly = 0x0100;
 inline constexpr std::uint32_t kAtomicNonblock = 0x0200;
 inline constexpr std::uint32_t kAtomicAllowModeset = 0x0400;
@@ -110,6 +112,16 @@ class AtomicRequest {
   std::string error_;
 };
 
+// A page-flip event (struct drm_event_vblank): the commit with `user_data` took effect at
+// vblank number `sequence` of `crtc_id`, at `timestamp_ns` on CLOCK_MONOTONIC (the clock
+// DRM stamps events with when DRM_CAP_TIMESTAMP_MONOTONIC is 1, as on every kernel since 3.x).
+struct FlipEvent {
+  std::uint64_t user_data = 0;
+  std::uint32_t crtc_id = 0;
+  std::uint32_t sequence = 0;
+  std::int64_t timestamp_ns = 0;
+};
+
 class KmsDevice {
  public:
   virtual ~KmsDevice() = default;
@@ -131,6 +143,17 @@ class KmsDevice {
   virtual void remove_fb(std::uint32_t fb_id) = 0;
   // Fails with the request's sticky error before reaching the kernel.
   virtual Result<void> atomic_commit(const AtomicRequest& request, std::uint32_t flags) = 0;
+  // The same with DRM_MODE_PAGE_FLIP_EVENT: an event carrying `user_data` is queued on the
+  // device when the commit takes effect. A nonblocking commit while one is still pending
+  // on the CRTC fails with EBUSY (code kms.busy).
+  virtual Result<void> atomic_commit_with_event(const AtomicRequest& request, std::uint32_t flags,
+                                                std::uint64_t user_data) = 0;
+  // Waits at most `timeout` for events and returns those that arrived (empty on timeout
+  // or when a signal interrupted the wait).
+  virtual Result<std::vector<FlipEvent>> read_flip_events(std::chrono::milliseconds timeout) = 0;
+  // The clock flip events are stamped with (CLOCK_MONOTONIC), in ns. A fake device
+  // simulates it.
+  virtual std::int64_t now_ns() const;
 };
 
 }  // namespace hdrd::display::kms

@@ -73,16 +73,6 @@ Result<PlaneChoice> pick_plane(KmsDevice& dev, const Resources& res, int crtc_in
                     "fourcc");
 }
 
-// Black in the buffer's format: zero, except FP16 alpha = 1.0 so the plane stays opaque.
-void fill_black(std::span<std::uint8_t> buf, std::uint32_t fourcc) {
-  std::fill(buf.begin(), buf.end(), 0);
-  if (fourcc != kDrmFormatAbgr16161616f) return;
-  for (std::size_t i = 6; i + 1 < buf.size(); i += 8) {
-    buf[i] = 0x00;
-    buf[i + 1] = 0x3c;
-  }
-}
-
 bool ten_bit_or_more(std::uint32_t fourcc) { return fourcc != kDrmFormatXrgb8888; }
 
 }  // namespace
@@ -137,6 +127,29 @@ void KmsOutput::release() {
   blobs_.clear();
 }
 
+void fill_black(std::span<std::uint8_t> buf, std::uint32_t fourcc) {
+  std::fill(buf.begin(), buf.end(), 0);
+  if (fourcc != kDrmFormatAbgr16161616f) return;
+  for (std::size_t i = 6; i + 1 < buf.size(); i += 8) {
+    buf[i] = 0x00;
+    buf[i + 1] = 0x3c;
+  }
+}
+
+void copy_frame(const EncodedFrame& f, const DumbBuffer& d, std::span<std::uint8_t> map) {
+  const std::size_t bytes_pp = static_cast<std::size_t>(scanout_bytes_per_pixel(f.drm_fourcc));
+  const std::size_t rows = std::min<std::size_t>(f.height, d.height);
+  const std::size_t row_bytes = std::min<std::size_t>(f.width, d.width) * bytes_pp;
+  for (std::size_t y = 0; y < rows; ++y)
+    std::memcpy(map.data() + y * d.pitch, f.data.data() + y * f.stride_bytes, row_bytes);
+}
+
+std::optional<std::string> fit_note(const EncodedFrame& f, const ModeInfo& m) {
+  if (f.width == m.hdisplay && f.height == m.vdisplay) return std::nullopt;
+  return fmt::format("frame {}x{} shown top-left in mode {}x{} ({})", f.width, f.height, m.hdisplay, m.vdisplay,
+                     f.width > m.hdisplay || f.height > m.vdisplay ? "cropped" : "black border");
+}
+
 // A dumb buffer at the mode's size holding the frame top-left (cropped or padded black).
 Result<void> KmsOutput::upload(const EncodedFrame& f, PresentResult& out) {
   const int bytes_pp = scanout_bytes_per_pixel(f.drm_fourcc);
@@ -146,14 +159,8 @@ Result<void> KmsOutput::upload(const EncodedFrame& f, PresentResult& out) {
   auto map = device_.map_dumb(*dumb_);
   if (!map) return wrap(map.error(), "cannot map the scan-out buffer");
   fill_black(*map, f.drm_fourcc);
-  const std::size_t rows = std::min<std::size_t>(f.height, dumb_->height);
-  const std::size_t row_bytes = std::min<std::size_t>(f.width, dumb_->width) * bytes_pp;
-  for (std::size_t y = 0; y < rows; ++y)
-    std::memcpy(map->data() + y * dumb_->pitch, f.data.data() + y * f.stride_bytes, row_bytes);
-  if (static_cast<std::uint32_t>(f.width) != dumb_->width || static_cast<std::uint32_t>(f.height) != dumb_->height)
-    out.notes.push_back(fmt::format("frame {}x{} shown top-left in mode {}x{} ({})", f.width, f.height, dumb_->width,
-                                    dumb_->height, f.width > int(dumb_->width) || f.height > int(dumb_->height)
-                                                       ? "cropped" : "black border"));
+  copy_frame(f, *dumb_, *map);
+  if (auto note = fit_note(f, out.mode)) out.notes.push_back(*note);
   auto fb = device_.add_fb2(dumb_->width, dumb_->height, f.drm_fourcc, dumb_->handle, dumb_->pitch);
   if (!fb) return wrap(fb.error(), fmt::format("cannot create a {} framebuffer", fourcc_name(f.drm_fourcc)));
   fb_ = *fb;
@@ -162,8 +169,11 @@ Result<void> KmsOutput::upload(const EncodedFrame& f, PresentResult& out) {
 }
 
 // HDR_OUTPUT_METADATA, Colorspace and max bpc for the signal (REFERENCE.md §6).
-Result<void> KmsOutput::add_signalling(const EncodedFrame& f, const Connector& c, const Properties& props,
-                                       const PresentOptions& opt, AtomicRequest& req, PresentResult& out) {
+Result<void> add_signalling(KmsDevice& device, const EncodedFrame& f, const ContentLightLevel& light,
+                            const OutputRoute& route, const PresentOptions& opt, AtomicRequest& req,
+                            PresentResult& out, std::vector<std::uint32_t>& blobs) {
+  const Connector& c = route.connector;
+  const Properties& props = route.connector_props;
   const bool hdr = f.target.mode == Mode::hdr10 || f.target.mode == Mode::hlg;
   const bool has_meta = find_property(props, "HDR_OUTPUT_METADATA");
   const bool has_colorspace = find_property(props, "Colorspace");
@@ -177,12 +187,12 @@ Result<void> KmsOutput::add_signalling(const EncodedFrame& f, const Connector& c
                                     missing, to_string(f.target.mode)));
   }
   if (hdr && has_meta) {
-    auto meta = make_hdr_output_metadata(f.target.mode, f.mastering, f.content_light);
+    auto meta = make_hdr_output_metadata(f.target.mode, f.mastering, light);
     if (!meta) return meta.error();
     const auto bytes = serialize(*meta);
-    auto blob = device_.create_blob(bytes);
+    auto blob = device.create_blob(bytes);
     if (!blob) return wrap(blob.error(), "HDR_OUTPUT_METADATA blob");
-    blobs_.push_back(*blob);
+    blobs.push_back(*blob);
     req.add(c.id, props, "HDR_OUTPUT_METADATA", *blob);
     out.hdr_metadata = *meta;
   } else if (has_meta) {
@@ -201,6 +211,60 @@ Result<void> KmsOutput::add_signalling(const EncodedFrame& f, const Connector& c
   return {};
 }
 
+Result<OutputRoute> plan_route(KmsDevice& device, const EncodedFrame& f, const PresentOptions& opt) {
+  const bool hdr = f.target.mode == Mode::hdr10 || f.target.mode == Mode::hlg;
+  OutputRoute r;
+  auto conn = pick_connector(device, opt.connector, hdr);
+  if (!conn) return conn.error();
+  r.connector = std::move(*conn);
+  auto res = device.resources();
+  if (!res) return res.error();
+  auto conn_props = device.properties(r.connector.id, kObjectConnector);
+  if (!conn_props) return conn_props.error();
+  r.connector_props = std::move(*conn_props);
+  auto crtc = pick_crtc(*res, r.connector, r.connector_props);
+  if (!crtc) return crtc.error();
+  auto crtc_props = device.properties(crtc->id, kObjectCrtc);
+  if (!crtc_props) return crtc_props.error();
+  r.crtc_id = crtc->id;
+  r.crtc_props = std::move(*crtc_props);
+  auto plane = pick_plane(device, *res, crtc->index, f.drm_fourcc);
+  if (!plane) return plane.error();
+  r.plane_id = plane->id;
+  r.plane_props = std::move(plane->props);
+  r.mode = pick_mode(r.connector, f.width, f.height);
+  return r;
+}
+
+void add_modeset(const OutputRoute& r, std::uint32_t mode_blob, AtomicRequest& req) {
+  req.add(r.connector.id, r.connector_props, "CRTC_ID", r.crtc_id);
+  req.add(r.crtc_id, r.crtc_props, "MODE_ID", mode_blob);
+  req.add(r.crtc_id, r.crtc_props, "ACTIVE", 1);
+  const std::uint64_t w = r.mode.hdisplay, h = r.mode.vdisplay;
+  req.add(r.plane_id, r.plane_props, "CRTC_ID", r.crtc_id);
+  req.add(r.plane_id, r.plane_props, "SRC_X", 0);
+  req.add(r.plane_id, r.plane_props, "SRC_Y", 0);
+  req.add(r.plane_id, r.plane_props, "SRC_W", w << 16);  // 16.16 fixed point
+  req.add(r.plane_id, r.plane_props, "SRC_H", h << 16);
+  req.add(r.plane_id, r.plane_props, "CRTC_X", 0);
+  req.add(r.plane_id, r.plane_props, "CRTC_Y", 0);
+  req.add(r.plane_id, r.plane_props, "CRTC_W", w);
+  req.add(r.plane_id, r.plane_props, "CRTC_H", h);
+}
+
+void add_flip(const OutputRoute& r, std::uint32_t fb_id, AtomicRequest& req) {
+  req.add(r.plane_id, r.plane_props, "FB_ID", fb_id);
+}
+
+void add_disable(const OutputRoute& r, AtomicRequest& req) {
+  req.add(r.plane_id, r.plane_props, "FB_ID", 0);
+  req.add(r.plane_id, r.plane_props, "CRTC_ID", 0);
+  req.add(r.crtc_id, r.crtc_props, "ACTIVE", 0);
+  req.add(r.crtc_id, r.crtc_props, "MODE_ID", 0);
+  req.add(r.connector.id, r.connector_props, "CRTC_ID", 0);
+  req.add_if_present(r.connector.id, r.connector_props, "HDR_OUTPUT_METADATA", 0);
+}
+
 Result<PresentResult> KmsOutput::show(const EncodedFrame& input, const PresentOptions& opt) {
   auto prepared = prepare_for_scanout(input, opt.scrgb);
   if (!prepared) return prepared.error();
@@ -211,23 +275,12 @@ Result<PresentResult> KmsOutput::show(const EncodedFrame& input, const PresentOp
   out.fourcc = f.drm_fourcc;
   out.signal = f.target.mode;
 
-  const bool hdr = f.target.mode == Mode::hdr10 || f.target.mode == Mode::hlg;
-  auto conn = pick_connector(device_, opt.connector, hdr);
-  if (!conn) return conn.error();
-  out.connector = conn->name;
-  auto res = device_.resources();
-  if (!res) return res.error();
-  auto conn_props = device_.properties(conn->id, kObjectConnector);
-  if (!conn_props) return conn_props.error();
-  auto crtc = pick_crtc(*res, *conn, *conn_props);
-  if (!crtc) return crtc.error();
-  auto crtc_props = device_.properties(crtc->id, kObjectCrtc);
-  if (!crtc_props) return crtc_props.error();
-  auto plane = pick_plane(device_, *res, crtc->index, f.drm_fourcc);
-  if (!plane) return plane.error();
-  out.crtc_id = crtc->id;
-  out.plane_id = plane->id;
-  out.mode = pick_mode(*conn, f.width, f.height);
+  auto route = plan_route(device_, f, opt);
+  if (!route) return route.error();
+  out.connector = route->connector.name;
+  out.crtc_id = route->crtc_id;
+  out.plane_id = route->plane_id;
+  out.mode = route->mode;
 
   release();  // the previous frame's buffers, now that the new one can be set up
   if (auto up = upload(f, out); !up) return up.error();
@@ -236,21 +289,9 @@ Result<PresentResult> KmsOutput::show(const EncodedFrame& input, const PresentOp
   auto mode_blob = device_.create_mode_blob(out.mode);
   if (!mode_blob) return wrap(mode_blob.error(), "MODE_ID blob");
   blobs_.push_back(*mode_blob);
-  req.add(conn->id, *conn_props, "CRTC_ID", crtc->id);
-  req.add(crtc->id, *crtc_props, "MODE_ID", *mode_blob);
-  req.add(crtc->id, *crtc_props, "ACTIVE", 1);
-  const std::uint64_t w = out.mode.hdisplay, h = out.mode.vdisplay;
-  req.add(plane->id, plane->props, "FB_ID", fb_);
-  req.add(plane->id, plane->props, "CRTC_ID", crtc->id);
-  req.add(plane->id, plane->props, "SRC_X", 0);
-  req.add(plane->id, plane->props, "SRC_Y", 0);
-  req.add(plane->id, plane->props, "SRC_W", w << 16);  // 16.16 fixed point
-  req.add(plane->id, plane->props, "SRC_H", h << 16);
-  req.add(plane->id, plane->props, "CRTC_X", 0);
-  req.add(plane->id, plane->props, "CRTC_Y", 0);
-  req.add(plane->id, plane->props, "CRTC_W", w);
-  req.add(plane->id, plane->props, "CRTC_H", h);
-  if (auto sig = add_signalling(f, *conn, *conn_props, opt, req, out); !sig) return sig.error();
+  add_modeset(*route, *mode_blob, req);
+  add_flip(*route, fb_, req);
+  if (auto sig = add_signalling(device_, f, f.content_light, *route, opt, req, out, blobs_); !sig) return sig.error();
 
   if (auto t = device_.atomic_commit(req, kAtomicTestOnly | kAtomicAllowModeset); !t)
     return wrap(t.error(), fmt::format("{} rejected the configuration in a TEST_ONLY commit", out.device));

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,45 @@ struct PresentResult {
 // when no display is attached.
 Result<kms::Connector> pick_connector(kms::KmsDevice& device, const std::string& name, bool prefer_hdr = false);
 
+// Where frames go, and the pieces of the atomic request: shared by KmsOutput (one frame)
+// and SequencePresenter (display/sequence_presenter.hpp: frames at the refresh rate).
+struct OutputRoute {
+  kms::Connector connector;
+  kms::Properties connector_props;
+  std::uint32_t crtc_id = 0;
+  kms::Properties crtc_props;
+  std::uint32_t plane_id = 0;
+  kms::Properties plane_props;
+  kms::ModeInfo mode;  // the frame's own size if the connector has it, else the preferred mode
+};
+
+// Connector, CRTC, primary plane taking the frame's fourcc, and mode for a scan-out-ready
+// frame (prepare_for_scanout's output).
+Result<OutputRoute> plan_route(kms::KmsDevice& device, const EncodedFrame& frame, const PresentOptions& options);
+
+// Connector -> CRTC, MODE_ID = `mode_blob`, ACTIVE = 1 and the plane's rectangles (the
+// whole mode, 16.16 source coordinates).
+void add_modeset(const OutputRoute& route, std::uint32_t mode_blob, kms::AtomicRequest& request);
+// The plane's FB_ID alone: what a page flip changes.
+void add_flip(const OutputRoute& route, std::uint32_t fb_id, kms::AtomicRequest& request);
+// Plane, CRTC and connector off (FB_ID, CRTC_ID = 0, ACTIVE = 0, MODE_ID = 0) and
+// HDR_OUTPUT_METADATA cleared: a modeset that leaves the display dark and unsignalled.
+void add_disable(const OutputRoute& route, kms::AtomicRequest& request);
+
+// HDR_OUTPUT_METADATA (a blob of the frame's mode and mastering display with `light`,
+// whose id is appended to `blobs`; cleared for SDR), Colorspace and max bpc (REFERENCE.md §6).
+Result<void> add_signalling(kms::KmsDevice& device, const EncodedFrame& frame, const ContentLightLevel& light,
+                            const OutputRoute& route, const PresentOptions& options, kms::AtomicRequest& request,
+                            PresentResult& out, std::vector<std::uint32_t>& blobs);
+
+// Black in the buffer's format: zero, except FP16 alpha = 1.0 so the plane stays opaque.
+void fill_black(std::span<std::uint8_t> buffer, std::uint32_t fourcc);
+// The frame's rows top-left into a mapped dumb buffer (cropped to it); the rest is left
+// as it is (black after fill_black).
+void copy_frame(const EncodedFrame& frame, const kms::DumbBuffer& buffer, std::span<std::uint8_t> mapped);
+// "frame WxH shown top-left in mode ..." when the frame is not the mode's size.
+std::optional<std::string> fit_note(const EncodedFrame& frame, const kms::ModeInfo& mode);
+
 // Owns what a shown frame needs (framebuffer, dumb buffer, blobs) until destroyed or the
 // next show(); the kernel turns the plane off when the device is closed.
 class KmsOutput {
@@ -58,9 +98,6 @@ class KmsOutput {
  private:
   void release();
   Result<void> upload(const EncodedFrame& frame, PresentResult& out);
-  Result<void> add_signalling(const EncodedFrame& frame, const kms::Connector& connector,
-                              const kms::Properties& connector_props, const PresentOptions& options,
-                              kms::AtomicRequest& request, PresentResult& out);
   kms::KmsDevice& device_;
   std::optional<kms::DumbBuffer> dumb_;
   std::uint32_t fb_ = 0;

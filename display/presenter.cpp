@@ -37,4 +37,23 @@ Result<PresentResult> Presenter::show(const EncodedFrame& frame, const PresentOp
   return *last;
 }
 
+Result<std::unique_ptr<SequencePresenter>> open_sequence_presenter(const SequenceOptions& options,
+                                                                   const std::string& device) {
+  const std::vector<std::string> paths = device.empty() ? drm_card_paths() : std::vector<std::string>{device};
+  if (paths.empty()) return make_error("kms.no_display", "no display attached: this machine has no DRM devices (headless)");
+  std::optional<Error> last;
+  for (const auto& path : paths) {
+    auto dev = DrmDevice::open(path);
+    if (!dev) return dev.error();
+    if (auto c = pick_connector(**dev, options.present.connector); !c) {
+      if (c.error().code != "kms.no_display" && c.error().code != "kms.no_connector") return c.error();
+      last = c.error();
+      continue;
+    }
+    std::unique_ptr<kms::KmsDevice> owned = std::move(*dev);
+    return std::make_unique<SequencePresenter>(std::move(owned), options);
+  }
+  return *last;
+}
+
 }  // namespace hdrd::display

@@ -8,6 +8,7 @@
 
 #include "display/drm_device.hpp"
 #include "display/kms_output.hpp"
+#include "display/sequence_presenter.hpp"
 
 namespace hdrd::display {
 
@@ -24,5 +25,12 @@ class Presenter {
   std::unique_ptr<DrmDevice> device_;
   std::unique_ptr<KmsOutput> output_;
 };
+
+// A SequencePresenter on the first DRM device (or `device`) with a display attached to
+// options.present.connector (or any connected one). The library entry point for live
+// output of sequences: `hdrd present` of dumps and `hdrd render --frames N --present`
+// push frames into it one at a time. Errors as Presenter::show.
+Result<std::unique_ptr<SequencePresenter>> open_sequence_presenter(const SequenceOptions& options,
+                                                                   const std::string& device = "");
 
 }  // namespace hdrd::display

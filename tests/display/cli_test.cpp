@@ -4,6 +4,7 @@
 
 #include <fstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "display/drm_device.hpp"
@@ -107,6 +108,29 @@ TEST(HdrdPresentCli, HeadlessSaysNoDisplayInOneLine) {
   auto bad = run_command(hdrd() + " present " + (tmp / "f.json").string() + " --scrgb maybe");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_EQ(count_lines(bad.err), 1);
+}
+
+TEST(HdrdPresentCli, SequencesAreCheckedBeforeLookingForADisplay) {
+  if (!drm_card_paths().empty()) GTEST_SKIP() << "this machine has DRM devices; the headless path is not testable";
+  hdrd::testing::TempDir tmp;
+  for (int i : {0, 1, 3}) {
+    std::ofstream(tmp / fmt::format("w.{:05d}.json", i)) << R"({"mode": "hdr10", "fourcc": "XB30", "width": 2, "height": 2})";
+    std::ofstream(tmp / fmt::format("w.{:05d}.raw", i), std::ios::binary) << std::string(16, '\0');
+  }
+  const std::string pattern = "'" + (tmp / "w.%05d.json").string() + "'";
+  auto gap = run_command(hdrd() + " present " + pattern);
+  EXPECT_EQ(gap.exit_code, 1);
+  EXPECT_EQ(gap.err, "hdrd: error: " + (tmp / "w.%05d.json").string() + ": frame 2 is missing (frames 0..1 exist, then 3)\n");
+  auto two = run_command(hdrd() + " present " + (tmp / "w.00000.json").string() + " " + (tmp / "w.00001.json").string() +
+                         " --fps 24 --json");
+  EXPECT_EQ(two.exit_code, 1);
+  EXPECT_EQ(two.err, "hdrd: error: no display attached: this machine has no DRM devices (headless)\n");
+  EXPECT_TRUE(two.out.empty());
+  for (const char* bad : {" --pacing fast", " --buffers 4", " --fps -1"}) {
+    auto r = run_command(hdrd() + " present " + tmp.path().string() + bad);
+    EXPECT_EQ(r.exit_code, 1) << bad;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  }
 }
 
 }  // namespace

@@ -20,6 +20,7 @@ for tool in qemu-system-x86_64 apt-get apt-cache dpkg-deb make gcc ldd gzip; do
 done
 [ -x "$check_bin" ] || skip "$check_bin is not built (configure with -DHDRD_VKMS_TEST=ON)"
 mkdir -p "$cache"
+cache=$(cd "$cache" && pwd)  # absolute: the headers' Makefile is rewritten to point into it
 cd "$cache"
 
 # 1. Debian 12's kernel and what an out-of-tree vkms build needs. The stock kernel is
