@@ -107,6 +107,9 @@ constexpr StatusEntry kStatus[] = {
     {"server.", 500},
     {"gl.", 503},
     {"kms.", 503},
+    {"present.cancelled", 499},
+    {"present.frame_mismatch", 422},  // a sequence frame of another size or mode than the first
+    {"present.", 500},
     {"queue.", 503},
     // The client's side of a connection (hdrctl, the tests): never sent by the daemon.
     {"client.", 502},

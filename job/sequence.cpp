@@ -13,6 +13,8 @@
 
 #include <fmt/format.h>
 
+#include "display/presenter.hpp"
+#include "display/sequence_presenter.hpp"
 #include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tone/temporal.hpp"
@@ -303,6 +305,7 @@ nlohmann::json frame_entry(const FrameItem& item, int scene) {
 // What the writer stage knows at the end, for the sequence's outputs.
 struct SequenceSummary {
   nlohmann::json first_sidecar;           // io::sidecar_json of frame 0: the target and signal fields
+  nlohmann::json present;                 // live output's statistics (present.live), else null
   nlohmann::json frames = nlohmann::json::array();
   std::vector<std::string> frame_kinds;  // per-frame dump kinds ("raw", "sidecar", ...)
   std::vector<std::string> warnings;
@@ -336,6 +339,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
   j.erase("settings");
   j["settings"] = {{"request", request.canonical()}};
   j["warnings"] = sum.warnings;
+  if (!sum.present.is_null()) j["present"] = sum.present;
   nlohmann::json files = nlohmann::json::object();
   const std::string stem = outbase.filename().string();
   for (const auto& kind : sum.frame_kinds) {
@@ -480,6 +484,7 @@ class SequenceSink {
   // A shard's scene numbers continue the sequence's: `scenes` started before its first frame.
   void set_scenes_before(int scenes) { scene_ = scenes - 1; }
   void set_total(int total) { total_ = total; }  // before the first frame is consumed
+  void set_present(nlohmann::json stats) { sum_.present = std::move(stats); }
 
   Result<SequenceResult> finish(double fps) {
     if (!metadata_) return make_error("internal", "a sequence finished without frames");
@@ -797,8 +802,30 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
     renderer = own_renderer.get();
   }
 
+  // Live output (present.live): frames go to the display as the writer stage takes them.
+  SequenceOptions opts = options;
+  std::unique_ptr<display::SequencePresenter> presenter;
+  if (request.boolean("present.live") && !decided && !shard) {
+    display::SequenceOptions po;
+    po.fps = src->fps;
+    po.buffers = static_cast<int>(request.integer("present.buffers"));
+    po.pacing = display::parse_pacing(request.text("present.pacing")).value_or(display::Pacing::every_frame);
+    po.present.connector = request.text("present.connector");
+    opts.on_frame = [&presenter, po, next = options.on_frame](const EncodedFrame& f, int index) -> Result<void> {
+      if (!presenter) {
+        auto p = display::open_sequence_presenter(po);
+        if (!p) return p.error();
+        presenter = std::move(*p);
+      }
+      if (auto ok = presenter->push(f); !ok) return ok.error();
+      return next ? next(f, index) : Result<void>{};
+    };
+  } else {
+    request.at("present.buffers"), request.at("present.pacing"), request.at("present.connector");
+  }
+
   temporal::TemporalTone tone(ts);
-  FrameLoop loop{request, options, *src, renderer, &tone, shard ? shard->track : nullptr, decided};
+  FrameLoop loop{request, opts, *src, renderer, &tone, shard ? shard->track : nullptr, decided};
   std::optional<SequenceSink> sink;
   BoundedQueue<FrameItem> queue(options.queue_depth);
   std::optional<Error> failure;
@@ -823,7 +850,7 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
   } joiner{queue, writer};
   auto start_sink = [&] {
     if (decided) return;
-    sink.emplace(request, outbase, options, *video, count);
+    sink.emplace(request, outbase, opts, *video, count);
     if (shard) sink->set_scenes_before(shard->scenes_before);
     writer = std::thread([&] {
       while (auto next = queue.pop()) {
@@ -845,6 +872,18 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
   if (writer.joinable()) writer.join();
   if (failed()) return *failure;
   if (decided) return SequenceResult{};
+  if (presenter) {
+    auto shown = presenter->finish();
+    if (!shown) return shown.error();
+    const auto& st = shown->stats;
+    sink->set_present({{"connector", shown->setup.connector},
+                       {"device", shown->setup.device},
+                       {"frames_shown", st.frames_shown},
+                       {"frames_dropped", st.frames_dropped},
+                       {"frames_late", st.frames_late},
+                       {"refresh_hz", st.refresh_hz},
+                       {"measured_fps", st.measured_fps}});
+  }
   return sink->finish(src->fps);
 }
 

@@ -32,6 +32,7 @@ constexpr std::string_view kCodecs[] = {"hevc", "av1", "h264"};
 constexpr std::string_view kContainers[] = {"mp4", "mkv"};
 constexpr std::string_view kAv1Encoders[] = {"libsvtav1", "libaom-av1"};
 constexpr std::string_view kGranularity[] = {"scene", "frame"};
+constexpr std::string_view kPacing[] = {"every-frame", "realtime"};
 constexpr std::string_view kBackends[] = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
 
 // The table. Order is the order of --help, docs/settings.md and capabilities.
@@ -409,6 +410,20 @@ std::vector<Setting> make_table() {
        .doc = "Sequences: HDR10+ profile B, a Bezier tone curve per scene for a display of this peak",
        .unit = "cd/m2", .min = 100, .max = 10000, .default_doc = "none (profile A)", .flag = "--hdr10plus-target",
        .metavar = "NITS", .sequence = true},
+      {.path = "present.live", .type = T::boolean, .sources = kSceneReferred,
+       .doc = "Sequences: show each frame on the attached display as it is made (KMS page flips at fps; "
+              "docs/displays.md)",
+       .default_json = "false", .flag = "--present", .sequence = true},
+      {.path = "present.pacing", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Sequences shown live: every-frame shows each frame (a renderer slower than fps), realtime drops "
+              "late ones",
+       .choices = kPacing, .default_json = "\"every-frame\"", .flag = "--pacing", .metavar = "P", .sequence = true},
+      {.path = "present.buffers", .type = T::integer, .sources = kSceneReferred,
+       .doc = "Sequences shown live: scan-out buffers, 2 (double) or 3 (triple buffering)", .min = 2, .max = 3,
+       .default_json = "2", .flag = "--buffers", .metavar = "N", .sequence = true},
+      {.path = "present.connector", .type = T::text, .sources = kSceneReferred,
+       .doc = "Sequences shown live: the connector (e.g. HDMI-A-1)", .default_doc = "the first connected one",
+       .flag = "--present-connector", .metavar = "NAME", .max_length = 64, .sequence = true},
       {.path = "png_level", .type = T::integer, .sources = kAllSources,
        .doc = "PNG deflate level: 0 stored, 1-3 fast, 4-9 smaller and much slower (docs/dump-format.md)", .min = 0,
        .max = 9, .default_json = "1", .flag = "--png-level", .metavar = "N", .query = "png_level"},
