@@ -15,6 +15,7 @@
 
 #include "display/presenter.hpp"
 #include "display/sequence_presenter.hpp"
+#include "encode/io/file_sequence.hpp"
 #include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tone/temporal.hpp"
@@ -27,113 +28,11 @@ namespace fs = std::filesystem;
 
 // ---- the frames of an EXR sequence -------------------------------------------------------
 
-namespace {
-
-Error sequence_error(std::string message) { return make_error("input.sequence", std::move(message), "images"); }
-
-// "shot.%04d.exr" -> prefix "shot.", width 4, suffix ".exr"; nullopt when the name holds
-// no single %d / %0Nd conversion.
-struct FramePattern {
-  std::string prefix, suffix;
-  int width = 0;
-};
-std::optional<FramePattern> parse_frame_pattern(const std::string& name) {
-  static const std::regex conversion(R"(^(.*?)%(0?([1-9]))?d(.*)$)");
-  std::smatch m;
-  if (!std::regex_match(name, m, conversion)) return std::nullopt;
-  FramePattern p{m[1].str(), m[4].str(), m[3].matched ? std::stoi(m[3].str()) : 0};
-  if (p.prefix.find('%') != std::string::npos || p.suffix.find('%') != std::string::npos) return std::nullopt;
-  return p;
-}
-
-Result<std::vector<fs::path>> pattern_files(const fs::path& spec, const FramePattern& p) {
-  const fs::path dir = spec.has_parent_path() ? spec.parent_path() : fs::path(".");
-  std::error_code ec;
-  std::vector<std::pair<long long, fs::path>> found;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string n = it->path().filename().string();
-    if (n.size() <= p.prefix.size() + p.suffix.size() || n.compare(0, p.prefix.size(), p.prefix) != 0 ||
-        n.compare(n.size() - p.suffix.size(), p.suffix.size(), p.suffix) != 0)
-      continue;
-    const std::string digits = n.substr(p.prefix.size(), n.size() - p.prefix.size() - p.suffix.size());
-    if (digits.size() > 12 || !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
-      continue;
-    if (p.width > 0 && digits.size() < static_cast<std::size_t>(p.width)) continue;  // %04d writes at least 4
-    if (p.width > 0 && digits.size() > static_cast<std::size_t>(p.width) && digits[0] == '0') continue;
-    if (p.width == 0 && digits.size() > 1 && digits[0] == '0') continue;  // %d writes no leading zeros
-    found.emplace_back(std::stoll(digits), it->path());
-  }
-  if (ec) return sequence_error(fmt::format("{}: cannot read the directory {}: {}", spec.string(), dir.string(), ec.message()));
-  if (found.empty()) return sequence_error(fmt::format("{}: no file matches the pattern", spec.string()));
-  std::sort(found.begin(), found.end());
-  std::vector<fs::path> files;
-  for (std::size_t i = 0; i < found.size(); ++i) {
-    if (i > 0 && found[i].first == found[i - 1].first)
-      return sequence_error(fmt::format("{}: frame {} exists twice", spec.string(), found[i].first));
-    if (i > 0 && found[i].first != found[i - 1].first + 1)
-      return sequence_error(fmt::format("{}: frame {} is missing (frames {}..{} exist, then {})", spec.string(),
-                                        found[i - 1].first + 1, found.front().first, found[i - 1].first,
-                                        found[i].first));
-    files.push_back(found[i].second);
-  }
-  return files;
-}
-
-Result<std::vector<fs::path>> directory_files(const fs::path& dir) {
-  std::error_code ec;
-  std::vector<fs::path> files;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    std::string ext = it->path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".exr" && it->is_regular_file(ec)) files.push_back(it->path());
-  }
-  if (ec) return sequence_error(fmt::format("{}: cannot read the directory: {}", dir.string(), ec.message()));
-  if (files.empty()) return sequence_error(fmt::format("{}: the directory holds no .exr file", dir.string()));
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
-Result<std::vector<fs::path>> list_files(const fs::path& list) {
-  std::ifstream in(list);
-  if (!in) return sequence_error(fmt::format("{}: cannot open the list file", list.string()));
-  std::vector<fs::path> files;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.size() > 4096) return sequence_error(fmt::format("{}:{}: a line longer than 4096 bytes", list.string(), number));
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    const auto first = line.find_first_not_of(" \t");
-    if (first == std::string::npos || line[first] == '#') continue;
-    const auto last = line.find_last_not_of(" \t");
-    fs::path p = line.substr(first, last - first + 1);
-    if (p.is_relative()) p = list.parent_path() / p;
-    files.push_back(std::move(p));
-    if (files.size() > 1000000) return sequence_error(fmt::format("{}: more than 1000000 frames", list.string()));
-  }
-  if (files.empty()) return sequence_error(fmt::format("{}: the list names no file", list.string()));
-  return files;
-}
-
-bool is_list_file(const fs::path& p) {
-  const std::string ext = p.extension().string();
-  return ext == ".txt" || ext == ".lst" || ext == ".list";
-}
-
-}  // namespace
-
-bool names_a_sequence(const fs::path& spec) {
-  std::error_code ec;
-  return parse_frame_pattern(spec.filename().string()).has_value() || fs::is_directory(spec, ec) || is_list_file(spec);
-}
+bool names_a_sequence(const fs::path& spec) { return io::names_a_file_sequence(spec); }
 
 Result<std::vector<fs::path>> exr_sequence_files(const fs::path& spec) {
-  if (spec.empty()) return sequence_error("a sequence of EXR frames is needed (a pattern, a directory or a list file)");
-  if (const auto p = parse_frame_pattern(spec.filename().string())) return pattern_files(spec, *p);
-  std::error_code ec;
-  if (fs::is_directory(spec, ec)) return directory_files(spec);
-  if (is_list_file(spec)) return list_files(spec);
-  return sequence_error(fmt::format("{}: not a frame pattern (%04d), a directory or a list file (.txt)", spec.string()));
+  if (spec.empty()) return make_error("input.sequence", "a sequence of EXR frames is needed (a pattern, a directory or a list file)", "images");
+  return io::file_sequence(spec);
 }
 
 bool sets_sequence_settings(const nlohmann::json& request) {
