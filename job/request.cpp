@@ -486,11 +486,11 @@ std::vector<std::string> FrameRequest::list(std::string_view path) const {
 nlohmann::json FrameRequest::canonical() const {
   json j = json::object();
   j["source"] = to_string(source);
-  for (const auto& [path, v] : values) j[json::json_pointer("/" + [&] {
-                                          std::string p = path;
-                                          std::replace(p.begin(), p.end(), '.', '/');
-                                          return p;
-                                        }())] = v;
+  for (const auto& [path, v] : values) {
+    std::string p = path;
+    std::replace(p.begin(), p.end(), '.', '/');
+    j[json::json_pointer("/" + p)] = v;
+  }
   if (!ui_png.empty()) {
     std::uint64_t h = 1469598103934665603ull;  // FNV-1a of the upload, so two uploads differ
     for (auto b : ui_png) h = (h ^ b) * 1099511628211ull;
@@ -668,11 +668,13 @@ void put(json& doc, std::string_view path, json value) {
 Result<nlohmann::json> cli_to_request_json(const std::vector<std::pair<std::string, std::string>>& flags) {
   json doc = json::object();
   for (const auto& [flag, text] : flags) {
-    if (const auto* c = [&]() -> const Composite* {
-          for (const auto& c : composites())
-            if (c.flag == flag) return &c;
-          return nullptr;
-        }()) {
+    const Composite* c = nullptr;  // (a loop, not a lambda: clang 14 cannot capture a structured binding)
+    for (const auto& candidate : composites())
+      if (candidate.flag == flag) {
+        c = &candidate;
+        break;
+      }
+    if (c) {
       std::string why;
       json frag = c->expand(text, &why);
       if (frag.is_null()) return make_error("request.type", one_line(fmt::format("{}: {}", flag, why)), std::string(c->paths[0]));

@@ -24,7 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-constexpr int kW = 32, kH = 16;
+constexpr int kW = 64, kH = 16;  // x265 takes frames 64 pixels wide or more
 const bool kQuiet = (video::quiet_codec_logs(), true);
 
 // A shot that brightens by a stop every 3 frames, then a cut to a dim one: adaptation is

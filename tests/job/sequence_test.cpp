@@ -275,8 +275,8 @@ TEST(Sequence, ContentLightRecomputedFromTheDecodedFrames) {
 TEST(Sequence, AnErrorLeavesNothingBehind) {
   testing::TempDir d;
   fs::create_directory(d / "in");
-  for (int i = 0; i < 3; ++i) write_shot(d / "in" / fmt::format("s.{}.exr", i), 1.0);
-  write_shot(d / "in" / "s.3.exr", 1.0, kW * 2, kH);  // another size: the video cannot take it
+  for (int i = 0; i < 3; ++i) write_shot(d / "in" / fmt::format("s.{}.exr", i), 1.0, 64, kH);  // x265: >= 64 wide
+  write_shot(d / "in" / "s.3.exr", 1.0, 128, kH);  // another size: the video cannot take it
   fs::create_directory(d / "out");
   const json body = {{"images", (d / "in" / "s.%d.exr").string()}, {"video", {{"codec", "hevc"}}}, {"formats", {"png"}}};
   auto r = run(body, d / "out" / "seq");
