@@ -16,6 +16,7 @@
 #include "encode/io/io.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tone/temporal.hpp"
+#include "encode/video/encoder_config.hpp"
 #include "encode/video/sequence_metadata.hpp"
 #include "encode/video/writer.hpp"
 #include "shading/renderer.hpp"
@@ -442,7 +443,54 @@ Result<std::vector<Output>> frame_outputs(const FrameRequest& r, Mode mode, bool
   return default_outputs(r.source, mode);
 }
 
+// The frame count and an encode's EXR files: every input unless `frames` asks for fewer.
+Result<std::pair<int, std::vector<fs::path>>> sequence_frames(const FrameRequest& request) {
+  std::vector<fs::path> inputs;
+  int total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
+  if (request.source == Source::encode) {
+    auto files = exr_sequence_files(request.text("images"));
+    if (!files) return files.error();
+    if (!request.is_null("frames") && total > static_cast<int>(files->size()))
+      return make_error("request.value",
+                        fmt::format("frames: {} asked, {} has {}", total, request.text("images"), files->size()),
+                        "frames");
+    if (request.is_null("frames")) total = static_cast<int>(files->size());
+    files->resize(total);
+    inputs = std::move(*files);
+  }
+  return std::pair{total, std::move(inputs)};
+}
+
 }  // namespace
+
+Result<SequencePlan> plan_sequence(const FrameRequest& request, const JobOptions& options) {
+  if (request.source == Source::pattern) return make_error("request.value", "patterns have no sequence form", "frames");
+  const double fps = request.number("fps");
+  const temporal::TemporalSettings ts = temporal_settings(request);
+  if (auto ok = temporal::validate(ts); !ok) return ok.error();
+  auto frames = sequence_frames(request);
+  if (!frames) return frames.error();
+  SequencePlan plan;
+  plan.frames = frames->first;
+  plan.inputs = std::move(frames->second);
+  EncodeInput input;
+  if (request.source == Source::encode) input.path = plan.inputs.front();
+  auto first = FrameJob::create(request, options, input);
+  if (!first) return first.error();
+  plan.target = (*first)->target();
+  if (auto o = frame_outputs(request, plan.target.mode, !request.is_null("video.codec")); !o) return o.error();
+  if (!request.is_null("video.codec")) {
+    auto v = video_settings(request, fps);
+    if (!v) return v.error();
+    video::StreamInfo stream;
+    stream.target = plan.target;
+    // An encode's size is the EXRs' (known at its first frame): an even stand-in here.
+    stream.width = request.source == Source::render ? static_cast<int>(request.integer("width")) : 64;
+    stream.height = request.source == Source::render ? static_cast<int>(request.integer("height")) : 64;
+    if (auto c = video::encoder_config(*v, stream); !c) return c.error();
+  }
+  return plan;
+}
 
 Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path& outbase, const SequenceOptions& options,
                                     shading::Renderer* renderer) {
@@ -464,19 +512,10 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const fs::path&
   const temporal::TemporalSettings ts = temporal_settings(request);
   if (auto ok = temporal::validate(ts); !ok) return ok.error();
 
-  std::vector<fs::path> inputs;
-  int total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
-  if (request.source == Source::encode) {
-    auto files = exr_sequence_files(request.text("images"));
-    if (!files) return files.error();
-    if (!request.is_null("frames") && total > static_cast<int>(files->size()))
-      return make_error("request.value",
-                        fmt::format("frames: {} asked, {} has {}", total, request.text("images"), files->size()),
-                        "frames");
-    if (request.is_null("frames")) total = static_cast<int>(files->size());
-    files->resize(total);
-    inputs = std::move(*files);
-  }
+  auto frames = sequence_frames(request);
+  if (!frames) return frames.error();
+  const int total = frames->first;
+  const std::vector<fs::path> inputs = std::move(frames->second);
   const double start_s = request.source == Source::render ? request.number("start_s") : 0.0;
 
   std::unique_ptr<shading::Renderer> own_renderer;

@@ -66,6 +66,18 @@ struct SequenceResult {
   nlohmann::json timings_ms = nlohmann::json::object();  // totals per stage
 };
 
+// What run_sequence refuses before its first frame, checked without rendering or encoding
+// one: the EXR files and the frame count, the temporal and video settings, the video
+// against the first frame's display target (H.264 is SDR only, HDR video is 10-bit, scrgb
+// has no video form) and a render's frame size (4:2:0 needs an even size; an encode's size
+// is its EXRs', checked at the first frame). The daemon answers 4xx from it before 202.
+struct SequencePlan {
+  int frames = 0;
+  std::vector<std::filesystem::path> inputs;  // an encode's EXR files, `frames` of them
+  DisplayTarget target;                       // the first frame's
+};
+Result<SequencePlan> plan_sequence(const FrameRequest& request, const JobOptions& options = {});
+
 // Runs a sequence request (FrameRequest::sequence, source render or encode) into OUTBASE*.
 // `renderer`: the render requests' (made here when null). The EXR frames come from the
 // request's `images` setting.
