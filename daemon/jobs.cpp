@@ -322,6 +322,11 @@ void JobRegistry::finish(const std::shared_ptr<Job>& job, JobState state, std::o
       job->progress.fps = s > 0 ? job->progress.frames_done / s : 0;
     }
     waiting.swap(job->on_final);
+    if (state == JobState::done && !waiting.empty()) {  // a DELETE came as the last frame was written
+      remove_sequence_files(job->files, job->progress.frames_done);
+      job->files.clear();
+      job->files_removed = true;
+    }
     info = info_of(*job);
     trim_history();
   }
