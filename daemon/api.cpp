@@ -47,6 +47,11 @@ const std::vector<Service::Route>& Service::routes() {
       {"POST", "/v1/encode", &Service::post_encode, BodyKind::upload},
       {"POST", "/v1/pattern", &Service::post_pattern, BodyKind::json},
       {"POST", "/v1/selftest", &Service::post_selftest, BodyKind::json},
+      {"POST", "/v1/sequences", &Service::post_sequences, BodyKind::json},
+      {"GET", "/v1/jobs", &Service::get_jobs, BodyKind::none},
+      // A path ending in '*': every path below it (the job's id, its result, its sidecar).
+      {"GET", "/v1/jobs/*", &Service::get_job, BodyKind::none},
+      {"DELETE", "/v1/jobs/*", &Service::delete_job, BodyKind::none},
   };
   return kRoutes;
 }
@@ -62,10 +67,18 @@ bool same_secret(std::string_view a, std::string_view b) {
   return diff == 0;
 }
 
+// `path` is the route's: exact, or a prefix when it ends in '*' (something must follow).
+bool route_matches(std::string_view route, std::string_view path) {
+  if (route.empty() || route.back() != '*') return route == path;
+  const std::string_view prefix = route.substr(0, route.size() - 1);
+  return path.size() > prefix.size() && path.substr(0, prefix.size()) == prefix;
+}
+
 std::string endpoint_label(const HttpRequest& r) {
   for (auto p : {"/v1/status", "/v1/capabilities", "/v1/displays", "/metrics", "/v1/render", "/v1/encode",
-                 "/v1/pattern", "/v1/selftest"})
+                 "/v1/pattern", "/v1/selftest", "/v1/sequences", "/v1/jobs"})
     if (r.path == p) return p;
+  if (route_matches("/v1/jobs/*", r.path)) return "/v1/jobs/{id}";
   return "other";
 }
 
@@ -74,14 +87,14 @@ std::string endpoint_label(const HttpRequest& r) {
 const Service::Route* Service::find_route(const HttpRequest& r, std::string* allow) const {
   const Route* path_match = nullptr;
   for (const auto& route : routes()) {
-    if (route.path != r.path) continue;
+    if (!route_matches(route.path, r.path)) continue;
     path_match = &route;
     const bool method_ok = route.method == r.method || (route.method == "GET" && r.method == "HEAD");
     if (method_ok) return &route;
   }
   if (path_match && allow) {
     for (const auto& route : routes())
-      if (route.path == r.path) *allow += (allow->empty() ? "" : ", ") + std::string(route.method);
+      if (route_matches(route.path, r.path)) *allow += (allow->empty() ? "" : ", ") + std::string(route.method);
   }
   return nullptr;
 }
@@ -227,6 +240,12 @@ nlohmann::json Service::status_json() const {
     j["renderer"] = backend.empty() ? json{{"available", false}, {"reason", s.workers.empty() ? json("no workers")
                                                                                               : s.workers[0].value("error", json(""))}}
                                     : json{{"available", true}, {"backend", backend}, {"gl_renderer", gl_renderer}};
+  }
+  if (jobs_) {
+    const auto s = jobs_->stats();
+    j["sequences"] = {{"queued", s.queued}, {"running", s.running}, {"finished", s.finished},
+                      {"max_running", cfg->sequences.max_running}, {"max_queued", cfg->sequences.max_queued},
+                      {"memory_in_flight_bytes", s.memory_in_flight_bytes}};
   }
   j["requests_in_flight"] = server_ ? server_->open_requests() : 0;
   return j;

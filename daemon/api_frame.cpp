@@ -27,18 +27,6 @@ std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 1469598103934665603ull
   return h;
 }
 
-job::ParseContext daemon_context(job::Source source, job::Spelling spelling, const Config& cfg) {
-  job::ParseContext ctx;
-  ctx.source = source;
-  ctx.spelling = spelling;
-  ctx.reach = job::Reach::daemon;
-  ctx.limits = cfg.limits;
-  ctx.resolve_path = [root = cfg.paths.asset_root](std::string_view p, const std::string& field) {
-    return resolve_in_root(root, p, field);
-  };
-  return ctx;
-}
-
 // The options of a POST /v1/encode: the JSON part of a multipart body, or the query
 // string of a raw EXR body. The EXR is moved into `exr`.
 Result<json> encode_options(HttpRequest& http, const Config& cfg, std::string& exr, job::Spelling& spelling) {
@@ -108,13 +96,7 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
   const std::optional<double> timeout_s = request->optional_number("timeout_s");
   const std::string key = canonical_key(request->canonical());
 
-  job::JobOptions jo;
-  jo.threads = encode_threads_per_job(*cfg);
-  // Files named by a request were resolved inside the asset root; JSON scenes may not
-  // reach further files (their paths are not checked against the root).
-  jo.scene_files = false;
-  jo.scene_base_dir = cfg->paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg->paths.asset_root;
-  jo.max_lights = cfg->limits.max_lights;
+  job::JobOptions jo = daemon_job_options(*cfg);
   job::EncodeInput input;
   if (source == job::Source::encode) {
     input.bytes.assign(exr.begin(), exr.end());

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "daemon/paths.hpp"
+
 namespace hdrd::daemon {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -58,6 +60,29 @@ int encode_threads_per_job(const Config& c) {
 
 std::string canonical_key(const nlohmann::json& canonical) {
   return canonical.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+job::ParseContext daemon_context(job::Source source, job::Spelling spelling, const Config& cfg) {
+  job::ParseContext ctx;
+  ctx.source = source;
+  ctx.spelling = spelling;
+  ctx.reach = job::Reach::daemon;
+  ctx.limits = cfg.limits;
+  ctx.resolve_path = [root = cfg.paths.asset_root](std::string_view p, const std::string& field) {
+    return resolve_in_root(root, p, field);
+  };
+  return ctx;
+}
+
+job::JobOptions daemon_job_options(const Config& cfg) {
+  job::JobOptions jo;
+  jo.threads = encode_threads_per_job(cfg);
+  // Files named by a request were resolved inside the asset root; JSON scenes may not
+  // reach further files (their paths are not checked against the root).
+  jo.scene_files = false;
+  jo.scene_base_dir = cfg.paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg.paths.asset_root;
+  jo.max_lights = cfg.limits.max_lights;
+  return jo;
 }
 
 }  // namespace hdrd::daemon

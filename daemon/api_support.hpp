@@ -14,6 +14,8 @@
 #include "daemon/http_server.hpp"
 #include "daemon/reply.hpp"
 #include "daemon/scheduler.hpp"
+#include "job/frame_job.hpp"
+#include "job/request.hpp"
 
 namespace hdrd::daemon {
 
@@ -42,5 +44,12 @@ int encode_threads_per_job(const Config& c);
 // The coalescing key of a canonical request (strings from query parameters may hold
 // invalid UTF-8; they are replaced rather than thrown over).
 std::string canonical_key(const nlohmann::json& canonical);
+
+// A request as the daemon parses it: its limits, paths confined to the asset root.
+job::ParseContext daemon_context(job::Source source, job::Spelling spelling, const Config& cfg);
+
+// The frame job's options in the daemon: its share of the encode threads, and files named
+// only by the request (JSON scenes may not reach further files).
+job::JobOptions daemon_job_options(const Config& cfg);
 
 }  // namespace hdrd::daemon

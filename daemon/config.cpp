@@ -108,7 +108,7 @@ Config parse_config(std::string_view text, const std::string& source) {
                   "[render] is gone: a request's defaults (scene, size, samples) are the settings table's, the same "
                   "for hdrd and the daemon (docs/settings.md)",
                   "render");
-    static const std::set<std::string> kSections = {"server", "workers", "paths", "limits", "log"};
+    static const std::set<std::string> kSections = {"server", "workers", "sequences", "paths", "limits", "log"};
     if (!kSections.count(std::string(k.str())))
       config_fail(where(source, v), fmt::format("unknown section [{}]", k.str()), std::string(k.str()));
   }
@@ -145,6 +145,12 @@ Config parse_config(std::string_view text, const std::string& source) {
   workers.read("retry_after_s", c.workers.retry_after_s);
   workers.read("memory_budget_bytes", c.workers.memory_budget_bytes);
   workers.finish();
+
+  Section sequences(root, "sequences", source);
+  sequences.read("max_running", c.sequences.max_running);
+  sequences.read("max_queued", c.sequences.max_queued);
+  sequences.read("history", c.sequences.history);
+  sequences.finish();
 
   Section paths(root, "paths", source);
   paths.read("asset_root", c.paths.asset_root);
@@ -211,6 +217,9 @@ void validate_config(const Config& c) {
   static const std::set<std::string> kBackends = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
   need(kBackends.count(w.backend) > 0, "workers.backend", "must be auto, egl, egl-device, egl-surfaceless or osmesa");
   const auto& l = c.limits;
+  range("sequences.max_running", c.sequences.max_running, 1, 64);
+  range("sequences.max_queued", c.sequences.max_queued, 0, 65536);
+  range("sequences.history", c.sequences.history, 1, 100000);
   range("limits.max_width", l.max_width, 1, kMaxImageDimension);
   range("limits.max_height", l.max_height, 1, kMaxImageDimension);
   range("limits.max_pixels", l.max_pixels, 1, kMaxImagePixels);
@@ -291,6 +300,9 @@ nlohmann::json config_json(const Config& c) {
        {{"render_workers", w.render_workers}, {"encode_threads", w.encode_threads}, {"queue_depth", w.queue_depth},
         {"backend", w.backend}, {"coalesce", w.coalesce}, {"retry_after_s", w.retry_after_s},
         {"memory_budget_bytes", w.memory_budget_bytes}}},
+      {"sequences",
+       {{"max_running", c.sequences.max_running}, {"max_queued", c.sequences.max_queued},
+        {"history", c.sequences.history}}},
       {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
       {"limits",
        {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},

@@ -50,6 +50,14 @@ struct WorkerConfig {
   std::uint64_t memory_budget_bytes = 0;
 };
 
+// POST /v1/sequences' jobs (jobs.hpp): they run on threads of their own, each with its own
+// renderer, beside the single-frame workers.
+struct SequencesConfig {
+  int max_running = 1;                     // jobs rendering/encoding at once
+  int max_queued = 16;                     // jobs waiting beyond those; then 503 queue.full
+  int history = 100;                       // finished jobs kept for GET /v1/jobs (oldest forgotten)
+};
+
 struct PathsConfig {
   std::filesystem::path asset_root;        // requests may name files only inside it
   std::filesystem::path dump_dir;          // "dump": true writes here, nowhere else
@@ -63,6 +71,7 @@ struct LogConfig {
 struct Config {
   ServerConfig server;
   WorkerConfig workers;
+  SequencesConfig sequences;
   PathsConfig paths;
   Limits limits;
   LogConfig log;

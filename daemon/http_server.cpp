@@ -297,12 +297,23 @@ void HttpServer::stop() {
 
 int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
   ctx.queued = true;
-  auto* holder = new std::shared_ptr<const std::string>(r.body);
-  MHD_Response* resp = MHD_create_response_from_buffer_with_free_callback_cls(
-      (*holder)->size(), const_cast<char*>((*holder)->data()), &free_body, holder);
-  if (!resp) {
-    delete holder;
-    return MHD_NO;
+  MHD_Response* resp = nullptr;
+  if (r.file) {  // streamed from a descriptor of MHD's own, which it closes
+    const int fd = ::dup(r.file->fd);
+    if (fd < 0) return MHD_NO;
+    resp = MHD_create_response_from_fd(r.file->size, fd);
+    if (!resp) {
+      ::close(fd);
+      return MHD_NO;
+    }
+  } else {
+    auto* holder = new std::shared_ptr<const std::string>(r.body);
+    resp = MHD_create_response_from_buffer_with_free_callback_cls((*holder)->size(), const_cast<char*>((*holder)->data()),
+                                                                  &free_body, holder);
+    if (!resp) {
+      delete holder;
+      return MHD_NO;
+    }
   }
   MHD_add_response_header(resp, "Content-Type", r.content_type.c_str());
   MHD_add_response_header(resp, "X-Hdrd-Request-Id", std::to_string(ctx.req.id).c_str());

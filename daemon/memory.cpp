@@ -19,6 +19,8 @@ constexpr std::uint64_t kFrameBpp = 8 + 6;        // encoded frame (up to 8 B/px
 constexpr std::uint64_t kRequestTextFactor = 3;   // body, its JSON document, a decoded base64 PNG
 constexpr std::uint64_t kPerJobBytes = 32u << 20; // shadow map (2048^2 x 4 B), LUTs, scratch, a first frame's JIT
 constexpr std::uint64_t kSceneFileFactor = 4;     // a scene or glTF file: parsed, meshes, their GPU copy
+constexpr std::uint64_t kVideoEncoderBpp = 96;   // estimate_sequence_memory: ~30 frames of 4:2:0 10-bit
+constexpr std::size_t kExrHeaderPrefixBytes = 4u << 20;  // where an EXR's header must end for the estimate
 constexpr int kMaxMsaaSamples = shading::kMaxSamples;  // what the renderer clamps a request to
 
 bool float_output(std::optional<job::Output> reply) {
@@ -116,6 +118,32 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
                                       std::size_t body_bytes) {
   const std::uint64_t pixels = frame_pixels(r);
   return kPerJobBytes + kRequestTextFactor * body_bytes + pixels * kFloatBpp + encode_bytes(reply, pixels);
+}
+
+Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
+                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits) {
+  std::uint64_t frame = 0, pixels = 0;
+  if (r.source == job::Source::encode) {
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(first_exr, ec);
+    if (ec) return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
+    std::vector<std::uint8_t> head(std::min<std::uint64_t>(size, kExrHeaderPrefixBytes));
+    std::ifstream in(first_exr, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size())))
+      return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
+    auto e = estimate_encode_memory(r, std::nullopt, head, limits);
+    if (!e) return e.error();
+    auto px = io::exr_declared_pixels(head);
+    pixels = px ? std::uint64_t(std::max<std::int64_t>(*px, 1)) : 1;
+    frame = *e - head.size() + size;  // the whole file is read for each frame
+  } else {
+    auto e = estimate_render_memory(r, std::nullopt, body_bytes, limits);
+    if (!e) return e.error();
+    frame = *e;
+    pixels = frame_pixels(r);
+  }
+  const std::uint64_t video = r.is_null("video.codec") ? 0 : pixels * kVideoEncoderBpp;
+  return frame * (queue_depth + 2) + video;
 }
 
 }  // namespace hdrd::daemon

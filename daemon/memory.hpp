@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <span>
 #include <string>
@@ -49,6 +50,16 @@ Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, std::op
 // A test pattern (POST /v1/pattern): a display-light frame of the request's size.
 std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
                                       std::size_t body_bytes);
+
+// A sequence (POST /v1/sequences): one frame's estimate (a render's; an encode's from its
+// first EXR's header and file size) for every frame its pipeline holds at once
+// (job/sequence.hpp: the frame being rendered/encoded, `queue_depth` queued, the one the
+// writer has), plus the video encoder's own frames when the request has a codec:
+// x265 medium keeps about 30 frames of 4:2:0 10-bit (rc-lookahead 20, frame threads, the
+// reference pictures) at 3 B/px, so 96 B/px (an allowance, not a measurement).
+// Errors: the EXR's own, request.limit for the UI.
+Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
+                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits);
 
 // The PNG limits a request's UI overlay is read under: no larger than a frame may be.
 io::PngLimits ui_png_limits(const Limits& limits);

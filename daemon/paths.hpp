@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string_view>
+#include <vector>
 
 #include "encode/result.hpp"
 
@@ -16,6 +17,19 @@ namespace hdrd::daemon {
 // too long). `field` names the request field for the error.
 Result<std::filesystem::path> resolve_in_root(const std::filesystem::path& root, std::string_view requested,
                                               std::string_view field);
+
+// An EXR sequence named by a request (`images`: a printf pattern, a directory, a list
+// file; job/sequence.hpp), inside `root`: a pattern's directory, a directory, a list file
+// must lie inside (canonically, as resolve_in_root). Returns the spec with its directory
+// canonical. Errors as resolve_in_root's.
+Result<std::filesystem::path> resolve_sequence_in_root(const std::filesystem::path& root, std::string_view requested,
+                                                       std::string_view field);
+
+// Every file of a sequence (what its pattern, directory or list names) lies inside `root`
+// once links are resolved, and is a regular file: path.forbidden / path.not_found naming
+// the first that is not. A list file may name any path, a pattern's match may be a link.
+Result<void> check_files_in_root(const std::filesystem::path& root, const std::vector<std::filesystem::path>& files,
+                                 std::string_view field);
 
 // True when `p` equals `root` or lies below it, comparing whole components (so that
 // /srv/assets2 is not inside /srv/assets). Both must be canonical.

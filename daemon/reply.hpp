@@ -2,6 +2,9 @@
 // requests send the same bytes without copies) and extra headers.
 #pragma once
 
+#include <unistd.h>
+
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -12,12 +15,27 @@
 
 namespace hdrd::daemon {
 
+// A file sent as the body (GET /v1/jobs/{id}/result): the HTTP layer streams it from the
+// descriptor (MHD_create_response_from_fd), so a large video is never read into memory.
+// Closed when the last copy of the reply is gone.
+struct FileBody {
+  int fd = -1;
+  std::uint64_t size = 0;
+  FileBody(int f, std::uint64_t n) : fd(f), size(n) {}
+  ~FileBody() {
+    if (fd >= 0) ::close(fd);
+  }
+  FileBody(const FileBody&) = delete;
+  FileBody& operator=(const FileBody&) = delete;
+};
+
 struct Reply {
   unsigned status = 200;
   std::string content_type = "application/json";
   std::shared_ptr<const std::string> body = std::make_shared<const std::string>();
   std::vector<std::pair<std::string, std::string>> headers;
   std::string error_code;  // set for error replies (access log, metrics)
+  std::shared_ptr<const FileBody> file;  // set: the body is this file (`body` stays empty)
 
   static Reply json(unsigned status, std::string text) {
     Reply r;

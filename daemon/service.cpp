@@ -98,6 +98,13 @@ void Service::start() {
   so.memory_budget_bytes = effective_memory_budget(cfg->workers);
   scheduler_ = std::make_unique<Scheduler>(so, renderer_factory(cfg->workers.backend));
   scheduler_->start();
+  JobRegistryOptions jo;
+  jo.max_running = cfg->sequences.max_running;
+  jo.max_queued = cfg->sequences.max_queued;
+  jo.history = cfg->sequences.history;
+  jo.memory_budget_bytes = so.memory_budget_bytes;
+  jo.backend = cfg->workers.backend;
+  jobs_ = std::make_unique<JobRegistry>(jo);
 
   HttpServerOptions ho;
   ho.threads = cfg->server.http_threads;
@@ -125,6 +132,7 @@ void Service::reload(Config fresh) {
   restart_needed(fresh.workers.render_workers != old->workers.render_workers, "workers.render_workers");
   restart_needed(fresh.workers.encode_threads != old->workers.encode_threads, "workers.encode_threads");
   restart_needed(fresh.workers.backend != old->workers.backend, "workers.backend");
+  restart_needed(fresh.sequences.max_running != old->sequences.max_running, "sequences.max_running");
   // Keep what cannot change now, so that status reports what is really in effect; the
   // connection caps and deadlines do change at once.
   const ServerConfig applied = fresh.server;
@@ -137,6 +145,7 @@ void Service::reload(Config fresh) {
   fresh.workers.render_workers = old->workers.render_workers;
   fresh.workers.encode_threads = old->workers.encode_threads;
   fresh.workers.backend = old->workers.backend;
+  fresh.sequences.max_running = old->sequences.max_running;
   if (fresh.paths.dump_dir != old->paths.dump_dir)
     dump_dir_ = fresh.paths.dump_dir.empty() ? nullptr : std::make_unique<DumpDirectory>(fresh.paths.dump_dir);
   set_log_level(fresh.log.level);
@@ -144,6 +153,8 @@ void Service::reload(Config fresh) {
     scheduler_->set_queue_depth(fresh.workers.queue_depth);
     scheduler_->set_memory_budget(effective_memory_budget(fresh.workers));
   }
+  if (jobs_)
+    jobs_->set_limits(fresh.sequences.max_queued, fresh.sequences.history, effective_memory_budget(fresh.workers));
   if (server_) {
     server_->set_connection_limits(connection_limits(fresh.server));
     server_->set_body_budget(effective_memory_budget(fresh.workers));
@@ -161,9 +172,13 @@ void Service::shutdown() {
   const auto cfg = config();
   if (server_) server_->stop_accepting();
   spdlog::info("shutting down: draining in-flight requests (up to {} s)", cfg->server.drain_timeout_s);
+  // Sequence jobs are cancelled, not drained: they may run for hours; run_sequence removes
+  // what a stopped job wrote, so no half-written sequence is left in the dump directory.
+  if (jobs_) jobs_->shutdown();
   if (scheduler_) scheduler_->drain_and_stop(std::chrono::duration<double>(cfg->server.drain_timeout_s));
   if (server_) server_->stop();
   server_.reset();
+  jobs_.reset();
   scheduler_.reset();
   spdlog::info("stopped");
 }

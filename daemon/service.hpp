@@ -14,6 +14,7 @@
 #include "daemon/config.hpp"
 #include "daemon/dump_dir.hpp"
 #include "daemon/http_server.hpp"
+#include "daemon/jobs.hpp"
 #include "daemon/metrics.hpp"
 #include "daemon/scheduler.hpp"
 #include "job/settings.hpp"
@@ -64,6 +65,11 @@ class Service final : public HttpHandler {
   // The three as one: the frame job's transport (api_frame.cpp).
   void post_frame(job::Source source, HttpRequest&, std::shared_ptr<Responder>);
   void post_selftest(HttpRequest&, std::shared_ptr<Responder>);  // api_selftest.cpp
+  // Sequences and their jobs (api_sequences.cpp, jobs.hpp).
+  void post_sequences(HttpRequest&, std::shared_ptr<Responder>);
+  void get_jobs(HttpRequest&, std::shared_ptr<Responder>);
+  void get_job(HttpRequest&, std::shared_ptr<Responder>);     // /v1/jobs/{id}[/result|/sidecar]
+  void delete_job(HttpRequest&, std::shared_ptr<Responder>);
   // GET /v1/capabilities' "patterns": names, descriptions, sources, parameters, modes.
   static nlohmann::json pattern_capabilities();
   // Admits a job and connects its reply, cancellation and deadline to the responder.
@@ -77,6 +83,7 @@ class Service final : public HttpHandler {
   Metrics metrics_;
   std::unique_ptr<DumpDirectory> dump_dir_;  // locked while used; stale temporaries removed at start
   std::unique_ptr<Scheduler> scheduler_;
+  std::unique_ptr<JobRegistry> jobs_;
   std::unique_ptr<HttpServer> server_;
   std::vector<std::string> listener_descriptions_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();

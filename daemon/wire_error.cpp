@@ -26,6 +26,12 @@ constexpr StatusEntry kStatus[] = {
     {"request.length_required", 411},  // chunked request bodies: a body must declare its length
     {"request.cancelled", 499},
     {"path.forbidden", 403},
+    // Sequence jobs (jobs.hpp): an unknown id, a result asked before it exists, a name a
+    // running job writes, files deleted or overwritten since.
+    {"job.not_found", 404},
+    {"job.not_ready", 409},
+    {"job.conflict", 409},
+    {"job.gone", 410},
     {"path.not_found", 404},
     {"queue.full", 503},
     {"queue.memory", 503},            // the in-flight memory budget is taken; retry later
@@ -81,6 +87,7 @@ constexpr StatusEntry kStatus[] = {
     {"video.state", 500},
     {"video.", 422},
     {"sequence.", 422},
+    {"input.", 422},    // an EXR sequence that cannot be read as one (a gap, no match, an empty list)
     {"hdr10plus.", 422},
     {"animation.", 422},   // a scene's animation or keyframes that cannot be sampled
     {"input.", 422},       // a sequence's frames: no file matches, a frame missing, an empty list

@@ -7,6 +7,9 @@
     print(frame.metadata["maxcll"], frame.metadata["fourcc"])
     bars = c.pattern("bt2111", display={"mode": "hlg"})       # ITU-R BT.2111-2 colour bars
     print(c.selftest("hdr10", peak_nits=1000)["passed"])
+    job = c.submit_sequence({"scene": "hdr", "frames": 48, "video": {"codec": "hevc"}})
+    c.wait(job["id"], progress=lambda j: print(j["frames_done"], "/", j["frames_total"]))
+    c.result(job["id"], "walk.mp4")                           # the video, streamed to the file
 
 Errors from the daemon raise HdrdError with .status, .code, .message and .field.
 """
@@ -14,10 +17,12 @@ Errors from the daemon raise HdrdError with .status, .code, .message and .field.
 import http.client
 import json
 import os
+import shutil
 import socket
+import time
 import uuid
 
-__all__ = ["HdrdClient", "HdrdError", "Frame", "default_socket"]
+__all__ = ["HdrdClient", "HdrdError", "JobFailed", "Frame", "default_socket"]
 
 
 def default_socket():
@@ -38,6 +43,19 @@ class HdrdError(Exception):
         self.code = code
         self.message = message
         self.field = field
+
+
+class JobFailed(Exception):
+    """wait() on a job that ended failed or cancelled: .job is its final state (a dict)."""
+
+    def __init__(self, job):
+        err = job.get("error") or {}
+        super().__init__(f"job {job.get('id')} {job.get('state')}: {err.get('message', 'no reason given')}"
+                         f" ({err.get('code', '')})")
+        self.job = job
+
+
+FINAL_STATES = ("done", "failed", "cancelled")
 
 
 class Frame:
@@ -215,3 +233,78 @@ class HdrdClient:
         body = b"".join(b"--" + boundary.encode() + b"\r\n" + head + data + b"\r\n" for head, data in parts)
         body += b"--" + boundary.encode() + b"--\r\n"
         return self._answer("/v1/encode", body, "multipart/form-data; boundary=" + boundary, options.get("dump"), accept)
+
+    # -- sequences and jobs (POST /v1/sequences, /v1/jobs) ----------------------------------
+    def submit_sequence(self, request, source=None):
+        """POST /v1/sequences: a render or encode request plus the sequence settings (frames,
+        fps, start_s, images, video.*, metadata.*, ...; docs/settings.md). `source` is
+        "render" or "encode"; by default encode when the request has "images" (a frame
+        pattern, directory or list file in the daemon's asset root), else render. Returns
+        the 202 answer: {"id", "name", "state", "frames_total", "links"}."""
+        body = dict(request)
+        if source is not None:
+            body["source"] = source
+        status, _, data = self.request("POST", "/v1/sequences", json.dumps(body), {"Content-Type": "application/json"})
+        self._raise_for(status, data)
+        return json.loads(data)
+
+    def job(self, job_id):
+        """GET /v1/jobs/{id}: state (queued, running, done, failed, cancelled), frames_done,
+        frames_total, fps, eta_s, error, files, timestamps."""
+        return self._get_json("/v1/jobs/" + job_id)
+
+    def jobs(self):
+        """GET /v1/jobs: {"jobs": [newest first], "queued", "running", "finished"}."""
+        return self._get_json("/v1/jobs")
+
+    def wait(self, job_id, progress=None, poll_s=0.25, timeout=None):
+        """Polls until the job is final; calls progress(job) after every poll. Returns the
+        final job when done; raises JobFailed when it failed or was cancelled, TimeoutError
+        after `timeout` seconds (the job goes on)."""
+        end = None if timeout is None else time.monotonic() + timeout
+        while True:
+            j = self.job(job_id)
+            if progress is not None:
+                progress(j)
+            if j["state"] in FINAL_STATES:
+                if j["state"] != "done":
+                    raise JobFailed(j)
+                return j
+            if end is not None and time.monotonic() > end:
+                raise TimeoutError(f"job {job_id} is still {j['state']} after {timeout} s")
+            time.sleep(poll_s)
+
+    def result(self, job_id, path):
+        """GET /v1/jobs/{id}/result into `path` (streamed, never held in memory): the video,
+        or the sequence sidecar when the request had no video. Returns the media type.
+        HdrdError 409 job.not_ready while the job runs."""
+        conn = self._connection()
+        headers = {"Authorization": "Bearer " + self.token} if self.token else {}
+        try:
+            conn.request("GET", f"/v1/jobs/{job_id}/result", headers=headers)
+            resp = conn.getresponse()
+            if resp.status >= 400:
+                self._raise_for(resp.status, resp.read())
+            tmp = f"{path}.tmp-{os.getpid()}"
+            try:
+                with open(tmp, "wb") as f:
+                    shutil.copyfileobj(resp, f, 1 << 20)
+                os.replace(tmp, path)
+            finally:
+                if os.path.exists(tmp):
+                    os.remove(tmp)
+            return resp.getheader("Content-Type", "")
+        except (http.client.HTTPException, OSError):
+            self.close()
+            raise
+
+    def sidecar(self, job_id):
+        """GET /v1/jobs/{id}/sidecar: the sequence sidecar (docs/sequences.md) as a dict."""
+        return self._get_json(f"/v1/jobs/{job_id}/sidecar")
+
+    def cancel(self, job_id):
+        """DELETE /v1/jobs/{id}: cancels a queued or running job (its partial files are
+        removed) or removes a finished job's files. Returns the job's final state."""
+        status, _, data = self.request("DELETE", "/v1/jobs/" + job_id)
+        self._raise_for(status, data)
+        return json.loads(data)

@@ -101,6 +101,11 @@ TEST(Config, MistakesAreRefusedWithTheKey) {
       {"[workers]\nqueue_depth = 100000000\n", "workers.queue_depth"},
       {"[workers]\nretry_after_s = 1000000\n", "workers.retry_after_s"},
       {"[workers]\nmemory_budget_bytes = 1000\n", "workers.memory_budget_bytes"},
+      {"[sequences]\nmax_running = 0\n", "sequences.max_running"},
+      {"[sequences]\nmax_running = 65\n", "sequences.max_running"},
+      {"[sequences]\nmax_queued = -1\n", "sequences.max_queued"},
+      {"[sequences]\nhistory = 0\n", "sequences.history"},
+      {"[sequences]\nmax_runing = 2\n", "sequences.max_runing"},
   };
   for (const auto& [toml, key] : table) {
     const Error e = config_error(toml);
@@ -110,6 +115,18 @@ TEST(Config, MistakesAreRefusedWithTheKey) {
   EXPECT_NE(config_error("[limits]\nmax_width = \"big\"\n").message.find("test.toml:2"), std::string::npos)
       << "errors name file:line";
   EXPECT_EQ(config_error("[limits\n").code, "config.invalid");
+}
+
+TEST(Config, SequencesKeysAreRead) {
+  const Config d = parse_config("", "test.toml");
+  EXPECT_EQ(d.sequences.max_running, 1);
+  EXPECT_EQ(d.sequences.max_queued, 16);
+  EXPECT_EQ(d.sequences.history, 100);
+  const Config c = parse_config("[sequences]\nmax_running = 3\nmax_queued = 0\nhistory = 7\n", "test.toml");
+  EXPECT_EQ(c.sequences.max_running, 3);
+  EXPECT_EQ(c.sequences.max_queued, 0);
+  EXPECT_EQ(c.sequences.history, 7);
+  EXPECT_EQ(config_json(c)["sequences"]["history"], 7);
 }
 
 TEST(Config, RangeErrorsNameTheRange) {

@@ -1,6 +1,6 @@
 // hdrctl: the command-line client of `hdrd serve`. Subcommands mirror the API
-// (docs/api.md): render, encode, pattern, selftest, displays, capabilities, status,
-// metrics. The request options and bodies are in options.cpp.
+// (docs/api.md): render, encode, pattern, selftest, sequence, jobs, displays,
+// capabilities, status, metrics. The request options and bodies are in options.cpp.
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,12 +11,14 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "daemon/client.hpp"
+#include "tools/common/progress_bar.hpp"
 #include "tools/hdrctl/options.hpp"
 
 namespace {
@@ -309,6 +311,107 @@ void run_get(const Global& g, const std::string& path, bool text) {
   print(j.dump(2));
 }
 
+// ---- sequences and jobs (POST /v1/sequences, /v1/jobs) ---------------------------------
+
+struct JobsOptions {
+  std::string action = "list";  // list, show, cancel, wait, result
+  std::string id;
+  std::string output;
+};
+
+json get_job(const Global& g, const std::string& id) {
+  json j = json::parse(call(g, "GET", "/v1/jobs/" + id).body, nullptr, false);
+  if (!j.is_object() || !j.contains("state")) throw Failure{1, "the daemon's answer for job " + id + " is not a job"};
+  return j;
+}
+
+std::string job_line(const json& j) {
+  std::string s = fmt::format("{}  {:9} {:>6}/{:<6} {:6.1f} fps  {}  {}", j.value("id", "?"), j.value("state", "?"),
+                              j.value("frames_done", 0), j.value("frames_total", 0), j.value("fps", 0.0),
+                              j.value("source", ""), j.value("name", ""));
+  if (j.contains("error")) s += "  (" + j["error"].value("code", "") + ": " + j["error"].value("message", "") + ")";
+  return s;
+}
+
+// Polls until the job is final, with the progress bar (frames, fps, time left) on stderr.
+json follow_job(const Global& g, const std::string& id, double poll_s) {
+  hdrd::cli::ProgressBar bar("hdrctl:", !g.quiet);
+  for (;;) {
+    json j = get_job(g, id);
+    const std::string state = j.value("state", "");
+    bar.update(j.value("frames_done", 0), j.value("frames_total", 0), j.value("fps", 0.0), j.value("eta_s", 0.0));
+    if (state == "done" || state == "failed" || state == "cancelled") {
+      bar.finish();
+      return j;
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(poll_s));
+  }
+}
+
+void download_result(const Global& g, const std::string& id, const std::string& output) {
+  const auto r = call(g, "GET", "/v1/jobs/" + id + "/result");
+  write_atomically(output, r.body);
+  if (!g.quiet)
+    std::fprintf(stderr, "hdrctl: wrote %s (%s, %zu bytes)\n", output.c_str(),
+                 r.header("content-type") ? r.header("content-type")->c_str() : "?", r.body.size());
+}
+
+// A final job: its JSON (--json) or a summary; failed and cancelled jobs exit 1.
+void finish_job(const Global& g, const json& j, const std::string& output) {
+  const std::string state = j.value("state", "");
+  if (state != "done") {
+    if (g.json) print(j.dump(2));
+    const std::string why = j.contains("error") ? fmt::format("{} ({})", j["error"].value("message", ""), j["error"].value("code", ""))
+                                                : std::string("no reason given");
+    throw Failure{1, fmt::format("job {} {}: {}", j.value("id", ""), state, why)};
+  }
+  if (!output.empty()) download_result(g, j.value("id", ""), output);
+  if (g.json) return print(j.dump(2));
+  std::string s = fmt::format("job {} done: {} frames in {:.1f} s ({:.1f} fps)\n", j.value("id", ""),
+                              j.value("frames_done", 0), j.value("elapsed_s", 0.0), j.value("fps", 0.0));
+  for (const auto& [kind, path] : j["files"].items()) s += fmt::format("  {:14} {}\n", kind, path.get<std::string>());
+  print(s);
+}
+
+void run_sequence(const Global& g, const SequenceOptions& o) {
+  const json b = sequence_body(o);
+  const auto r = call(g, "POST", "/v1/sequences", b.dump(), {{"Content-Type", "application/json"}});
+  const json accepted = json::parse(r.body, nullptr, false);
+  if (!accepted.is_object() || !accepted.contains("id")) throw Failure{1, "the daemon's answer is not a job"};
+  const std::string id = accepted["id"];
+  if (o.detach) return print(g.json ? accepted.dump(2) : id);
+  if (!g.quiet)
+    std::fprintf(stderr, "hdrctl: job %s, %d frames (it goes on if hdrctl stops: hdrctl jobs cancel %s)\n", id.c_str(),
+                 accepted.value("frames_total", 0), id.c_str());
+  finish_job(g, follow_job(g, id, o.poll_s), o.output);
+}
+
+void run_jobs(const Global& g, const JobsOptions& o) {
+  if (o.action == "list") {
+    const json j = json::parse(call(g, "GET", "/v1/jobs").body, nullptr, false);
+    if (g.json || !j.contains("jobs")) return print(j.dump(2));
+    std::string s = fmt::format("{} queued, {} running, {} finished\n", j.value("queued", 0), j.value("running", 0),
+                                j.value("finished", 0));
+    for (const auto& job : j["jobs"]) s += job_line(job) + "\n";
+    return print(s);
+  }
+  if (o.id.empty()) throw Failure{2, "hdrctl jobs " + o.action + " needs a job id"};
+  if (o.action == "show") {
+    const json j = get_job(g, o.id);
+    return print(g.json ? j.dump(2) : job_line(j));
+  }
+  if (o.action == "cancel") {
+    const json j = json::parse(call(g, "DELETE", "/v1/jobs/" + o.id).body, nullptr, false);
+    return print(g.json ? j.dump(2) : job_line(j));
+  }
+  if (o.action == "wait") return finish_job(g, follow_job(g, o.id, 0.25), o.output);
+  if (o.action == "result") {
+    if (o.output.empty()) throw Failure{2, "hdrctl jobs result ID needs -o FILE"};
+    return download_result(g, o.id, o.output);
+  }
+  throw Failure{2, "hdrctl jobs: unknown action '" + o.action + "' (list, show, cancel, wait, result)"};
+}
+
 void add_global_options(CLI::App& app, Global& g) {
   app.add_option("--socket", g.socket, "Daemon socket (default: $HDRD_SOCKET, $XDG_RUNTIME_DIR/hdrd.sock)");
   app.add_option("--tcp", g.tcp, "Connect over TCP host:port instead (needs --token-file)");
@@ -346,6 +449,8 @@ int main(int argc, char** argv) {
       "  hdrctl encode ../shared/fixtures/exr/Desk.exr --mode sdr -o desk.png\n"
       "  hdrctl pattern bt2111 --mode hlg -o bars.png\n"
       "  hdrctl selftest --mode hdr10 --peak 1000\n"
+      "  hdrctl sequence render --scene hdr --frames 48 --video hevc -o walk.mp4\n"
+      "  hdrctl jobs\n"
       "  hdrctl capabilities --json | jq '.tone_curves[].name'\n"
       "  hdrctl metrics\n"
       "Every subcommand has --help with its own examples. Exit status: 0 ok, 1 an error answer (or a failed\n"
@@ -394,6 +499,31 @@ int main(int argc, char** argv) {
                              "hdrctl selftest --mode sdr-bt1886 --failed",
                              "Exit status 1 when a check fails (the daemon still answers 200: docs/api.md)."}));
 
+  auto* sequence = app.add_subcommand("sequence", "POST /v1/sequences: render or encode a sequence as a job, follow it");
+  sequence->require_subcommand(1);
+  SequenceOptions sro, seo;
+  sro.source = hdrd::job::Source::render;
+  seo.source = hdrd::job::Source::encode;
+  auto* seq_render = sequence->add_subcommand("render", "Render a sequence of frames (the scene's time axis)");
+  add_sequence_options(seq_render, sro);
+  auto* seq_encode = sequence->add_subcommand("encode", "Encode an EXR sequence from the daemon's asset root");
+  seq_encode->add_option("images", seo.images, "A frame pattern (shot/shot.%04d.exr), a directory or a list file, "
+                                               "in the daemon's asset root")->required();
+  add_sequence_options(seq_encode, seo);
+  sequence->footer(examples({"hdrctl sequence render --scene hdr --frames 144 --fps 24 --video hevc -o walk.mp4",
+                             "hdrctl sequence encode 'shots/a.%04d.exr' --mode hdr10 --video hevc --name a -o a.mp4",
+                             "hdrctl sequence render --frames 48 --format png --detach        (prints the job id)",
+                             "The options are hdrd render/encode's (docs/settings.md, sequence settings included);",
+                             "the files go into the daemon's dump directory; -o downloads the video (else the sidecar)."}));
+
+  JobsOptions jo;
+  auto* jobs = app.add_subcommand("jobs", "GET/DELETE /v1/jobs: list, show, cancel, wait for or fetch sequence jobs");
+  jobs->add_option("action", jo.action, "list (default), show ID, cancel ID, wait ID, result ID -o FILE");
+  jobs->add_option("id", jo.id, "The job's id");
+  jobs->add_option("-o,--output", jo.output, "wait/result: download the result here");
+  jobs->footer(examples({"hdrctl jobs", "hdrctl jobs show 3f2a9c0d1e4b5a67 --json", "hdrctl jobs cancel 3f2a9c0d1e4b5a67",
+                         "hdrctl jobs wait 3f2a9c0d1e4b5a67 -o walk.mp4"}));
+
   auto* displays = app.add_subcommand("displays", "GET /v1/displays: attached displays and their HDR capabilities");
   auto* caps = app.add_subcommand("capabilities", "GET /v1/capabilities: modes, tone curves, patterns, limits");
   auto* status = app.add_subcommand("status", "GET /v1/status: version, uptime, renderer, queue");
@@ -410,6 +540,9 @@ int main(int argc, char** argv) {
     else if (*encode) run_encode(g, eo);
     else if (*pattern) run_pattern(g, po);
     else if (*selftest) return run_selftest(g, so);
+    else if (*seq_render) run_sequence(g, sro);
+    else if (*seq_encode) run_sequence(g, seo);
+    else if (*jobs) run_jobs(g, jo);
     else if (*displays) run_get(g, "/v1/displays", false);
     else if (*caps) run_get(g, "/v1/capabilities", false);
     else if (*status) run_get(g, "/v1/status", false);

@@ -101,6 +101,31 @@ json frame_body(const FrameOptions& o, const json& extra) {
   return b;
 }
 
+void add_sequence_options(CLI::App* app, SequenceOptions& o) {
+  app->add_option("--request", o.request_file, "JSON request body to start from (file, or - for stdin)");
+  app->add_option("--set", o.sets, "Any request field: key.path=JSON (repeatable)");
+  app->add_option("-o,--output", o.output, "When the job is done, download its video (else its sidecar) here");
+  app->add_option("--format", o.formats, "Per-frame dumps beside the video: png,exr,raw,... (OUTBASE.NNNNN.EXT)");
+  app->add_option("--name", o.name, "Base name of the files in the daemon's dump directory (default: generated)");
+  app->add_flag("--detach", o.detach, "Print the job's id and return (follow it with hdrctl jobs show ID)");
+  app->add_option("--poll", o.poll_s, "Seconds between progress polls")->check(CLI::Range(0.02, 60.0));
+  hdrd::cli::add_setting_options(*app, o.source, hdrd::job::Reach::daemon, o.settings, {"--format"});
+}
+
+json sequence_body(const SequenceOptions& o) {
+  json b = o.request_file.empty() ? json::object() : json::parse(read_all(o.request_file), nullptr, false);
+  if (b.is_discarded() || !b.is_object()) throw Failure{2, "--request: not a JSON object"};
+  auto settings = hdrd::cli::request_json(o.settings);
+  if (!settings) throw Failure{2, settings.error().message};
+  b.merge_patch(*settings);
+  b["source"] = std::string(hdrd::job::to_string(o.source));
+  if (!o.images.empty()) b["images"] = o.images;
+  if (!o.formats.empty()) b["formats"] = split(o.formats);
+  if (o.name) b["name"] = *o.name;
+  for (const auto& s : o.sets) apply_set(b, s);
+  return b;
+}
+
 std::string accept_for(const OutputOptions& o) {
   if (o.dump) return "application/json";
   std::string name = o.format;

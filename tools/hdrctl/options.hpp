@@ -37,6 +37,21 @@ struct FrameOptions {
   std::string ui_upload;  // a local PNG sent in the request (ui.png_base64)
 };
 
+// hdrctl sequence render|encode: a sequence request (POST /v1/sequences) and what to do
+// with the job: follow it with a progress bar, download its result, or only print its id.
+struct SequenceOptions {
+  hdrd::job::Source source = hdrd::job::Source::render;
+  hdrd::cli::SettingArgs settings;
+  std::string request_file;
+  std::vector<std::string> sets;
+  std::string images;       // encode: a pattern, directory or list file in the daemon's asset root
+  std::string output;       // download the result (the video, else the sidecar) here
+  std::string formats;      // per-frame dumps (png,exr,raw,...)
+  std::optional<std::string> name;
+  bool detach = false;
+  double poll_s = 0.25;
+};
+
 std::string read_all(const std::string& path);  // "-": stdin
 
 // The settings of `source` as options, and hdrctl's transport options.
@@ -45,6 +60,13 @@ void add_frame_options(CLI::App* app, hdrd::job::Source source, FrameOptions& o)
 // The request body: the --request file, then the setting options, then `extra` (a pattern's
 // name), then every --set.
 nlohmann::json frame_body(const FrameOptions& o, const nlohmann::json& extra = nlohmann::json::object());
+
+// The settings of `source` (sequence settings included) and hdrctl's sequence options.
+void add_sequence_options(CLI::App* app, SequenceOptions& o);
+
+// The POST /v1/sequences body: the --request file, the setting options, source, images,
+// formats and name, then every --set.
+nlohmann::json sequence_body(const SequenceOptions& o);
 
 // The Accept header for the answer: JSON for a dump, else from --format or -o's extension.
 std::string accept_for(const OutputOptions& o);
