@@ -52,6 +52,9 @@ const std::vector<Service::Route>& Service::routes() {
       // A path ending in '*': every path below it (the job's id, its result, its sidecar).
       {"GET", "/v1/jobs/*", &Service::get_job, BodyKind::none},
       {"DELETE", "/v1/jobs/*", &Service::delete_job, BodyKind::none},
+      {"POST", "/v1/cluster/submissions", &Service::post_cluster_submission, BodyKind::json},
+      {"GET", "/v1/cluster/submissions/*", &Service::get_cluster_submission, BodyKind::none},
+      {"DELETE", "/v1/cluster/submissions/*", &Service::delete_cluster_submission, BodyKind::none},
   };
   return kRoutes;
 }

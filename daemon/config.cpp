@@ -108,7 +108,7 @@ Config parse_config(std::string_view text, const std::string& source) {
                   "[render] is gone: a request's defaults (scene, size, samples) are the settings table's, the same "
                   "for hdrd and the daemon (docs/settings.md)",
                   "render");
-    static const std::set<std::string> kSections = {"server", "workers", "sequences", "paths", "limits", "log"};
+    static const std::set<std::string> kSections = {"server", "workers", "sequences", "cluster", "paths", "limits", "log"};
     if (!kSections.count(std::string(k.str())))
       config_fail(where(source, v), fmt::format("unknown section [{}]", k.str()), std::string(k.str()));
   }
@@ -151,6 +151,15 @@ Config parse_config(std::string_view text, const std::string& source) {
   sequences.read("max_queued", c.sequences.max_queued);
   sequences.read("history", c.sequences.history);
   sequences.finish();
+
+  Section cluster(root, "cluster", source);
+  cluster.read("slurm_scripts_dir", c.cluster.slurm_scripts_dir);
+  cluster.read("slurm_bin_dir", c.cluster.slurm_bin_dir);
+  cluster.read("slurm_conf", c.cluster.slurm_conf);
+  cluster.read("hdrd_program", c.cluster.hdrd_program);
+  cluster.read("sbatch_options", c.cluster.sbatch_options);
+  cluster.read("command_timeout_ms", c.cluster.command_timeout_ms);
+  cluster.finish();
 
   Section paths(root, "paths", source);
   paths.read("asset_root", c.paths.asset_root);
@@ -220,6 +229,7 @@ void validate_config(const Config& c) {
   range("sequences.max_running", c.sequences.max_running, 1, 64);
   range("sequences.max_queued", c.sequences.max_queued, 0, 65536);
   range("sequences.history", c.sequences.history, 1, 100000);
+  range("cluster.command_timeout_ms", c.cluster.command_timeout_ms, 100, 3600000);
   range("limits.max_width", l.max_width, 1, kMaxImageDimension);
   range("limits.max_height", l.max_height, 1, kMaxImageDimension);
   range("limits.max_pixels", l.max_pixels, 1, kMaxImagePixels);
@@ -303,6 +313,10 @@ nlohmann::json config_json(const Config& c) {
       {"sequences",
        {{"max_running", c.sequences.max_running}, {"max_queued", c.sequences.max_queued},
         {"history", c.sequences.history}}},
+      {"cluster",
+       {{"slurm_scripts_dir", c.cluster.slurm_scripts_dir.string()}, {"slurm_bin_dir", c.cluster.slurm_bin_dir.string()},
+        {"slurm_conf", c.cluster.slurm_conf.string()}, {"hdrd_program", c.cluster.hdrd_program},
+        {"sbatch_options", c.cluster.sbatch_options}, {"command_timeout_ms", c.cluster.command_timeout_ms}}},
       {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
       {"limits",
        {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},

@@ -58,6 +58,17 @@ struct SequencesConfig {
   int history = 100;                       // finished jobs kept for GET /v1/jobs (oldest forgotten)
 };
 
+// POST /v1/cluster/submissions (api_cluster.cpp, slurm.hpp): submitting sequence plans to a
+// Slurm cluster. Off unless slurm_scripts_dir names deploy/slurm.
+struct ClusterConfig {
+  std::filesystem::path slurm_scripts_dir;  // deploy/slurm (shard.sbatch, merge.sbatch); empty: no cluster
+  std::filesystem::path slurm_bin_dir;      // sbatch, squeue, sacct, scancel; empty: PATH
+  std::filesystem::path slurm_conf;         // SLURM_CONF for them; empty: their default
+  std::string hdrd_program = "hdrd";        // hdrd as the compute nodes see it
+  std::string sbatch_options;               // given to both sbatch calls, split at spaces ("--partition=render")
+  int command_timeout_ms = 30000;           // each sbatch/squeue/sacct/scancel
+};
+
 struct PathsConfig {
   std::filesystem::path asset_root;        // requests may name files only inside it
   std::filesystem::path dump_dir;          // "dump": true writes here, nowhere else
@@ -72,6 +83,7 @@ struct Config {
   ServerConfig server;
   WorkerConfig workers;
   SequencesConfig sequences;
+  ClusterConfig cluster;
   PathsConfig paths;
   Limits limits;
   LogConfig log;

@@ -105,6 +105,7 @@ void Service::start() {
   jo.memory_budget_bytes = so.memory_budget_bytes;
   jo.backend = cfg->workers.backend;
   jobs_ = std::make_unique<JobRegistry>(jo);
+  cluster_ = new_cluster_state();
 
   HttpServerOptions ho;
   ho.threads = cfg->server.http_threads;

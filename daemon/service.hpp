@@ -70,6 +70,13 @@ class Service final : public HttpHandler {
   void get_jobs(HttpRequest&, std::shared_ptr<Responder>);
   void get_job(HttpRequest&, std::shared_ptr<Responder>);     // /v1/jobs/{id}[/result|/sidecar]
   void delete_job(HttpRequest&, std::shared_ptr<Responder>);
+  // Sequence plans submitted to a Slurm cluster (api_cluster.cpp, slurm.hpp, docs/cluster.md).
+  void post_cluster_submission(HttpRequest&, std::shared_ptr<Responder>);
+  void get_cluster_submission(HttpRequest&, std::shared_ptr<Responder>);     // /v1/cluster/submissions/{id}
+  void delete_cluster_submission(HttpRequest&, std::shared_ptr<Responder>);
+  struct ClusterState;
+  static std::shared_ptr<ClusterState> new_cluster_state();  // api_cluster.cpp
+  std::shared_ptr<ClusterState> cluster_;
   // GET /v1/capabilities' "patterns": names, descriptions, sources, parameters, modes.
   static nlohmann::json pattern_capabilities();
   // Admits a job and connects its reply, cancellation and deadline to the responder.

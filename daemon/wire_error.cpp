@@ -93,6 +93,8 @@ constexpr StatusEntry kStatus[] = {
     {"input.", 422},       // a sequence's frames: no file matches, a frame missing, an empty list
     {"plan.", 422},        // a sequence plan file that is not one (the cluster client)
     {"slurm.unknown_job", 404},
+    {"cluster.not_found", 404},
+    {"cluster.unavailable", 503},  // no Slurm cluster configured ([cluster] slurm_scripts_dir)
     {"slurm.options", 400},
     // The cluster engine's side: Slurm or a subprocess failed, not the request.
     {"slurm.", 502},
