@@ -695,15 +695,22 @@ Result<nlohmann::json> cli_to_request_json(const std::vector<std::pair<std::stri
 
 Result<nlohmann::json> query_to_request_json(const std::vector<std::pair<std::string, std::string>>& query) {
   json doc = json::object();
+  // A name quoted in an error: its first 64 bytes, cut at a character boundary so that it
+  // stays UTF-8 (the error body is JSON).
+  auto head = [](const std::string& k) {
+    std::size_t n = std::min<std::size_t>(k.size(), 64);
+    while (n > 0 && n < k.size() && (static_cast<unsigned char>(k[n]) & 0xC0) == 0x80) --n;
+    return k.substr(0, n);
+  };
   for (const auto& [key, value] : query) {
-    const std::string shown = one_line(key.substr(0, 64));
+    const std::string shown = one_line(head(key));
     if (!valid_utf8(key) || !valid_utf8(value))
       return make_error("request.value", fmt::format("query parameter '{}': not valid UTF-8", valid_utf8(key) ? shown : "?"),
-                        valid_utf8(key) ? key.substr(0, 64) : "");
+                        valid_utf8(key) ? head(key) : "");
     const Setting* s = nullptr;
     for (const auto& e : settings())
       if (e.query == key) s = &e;
-    if (!s) return make_error("request.unknown_field", fmt::format("query parameter '{}': unknown", shown), key.substr(0, 64));
+    if (!s) return make_error("request.unknown_field", fmt::format("query parameter '{}': unknown", shown), head(key));
     std::string p(s->path);
     std::replace(p.begin(), p.end(), '.', '/');
     if (doc.contains(json::json_pointer("/" + p)))

@@ -66,12 +66,13 @@ class BoundedSax {
     const std::string field = path_of(path_);
     if (e.id == 406) {  // out_of_range.406: a number that overflows a double
       error_ = make_error(code("value"),
-                          fmt::format("{}: {}: a number beyond the range of a double (about 1.8e308)", bounds_.what,
-                                      field.empty() ? "value" : field),
+                          one_line(fmt::format("{}: {}: a number beyond the range of a double (about 1.8e308)",
+                                               bounds_.what, field.empty() ? "value" : field)),
                           field);
     } else {  // the place, not a field: the field itself is not what is wrong
-      error_ = make_error(code("syntax"), fmt::format("{}: not valid JSON near byte {}{}: {}", bounds_.what, position,
-                                                      where(field), library_detail(e.what())));
+      // One line whatever the keys hold (a key may be "a\nb").
+      error_ = make_error(code("syntax"), one_line(fmt::format("{}: not valid JSON near byte {}{}: {}", bounds_.what, position,
+                                                               where(field), library_detail(e.what()))));
     }
     return false;
   }
@@ -93,8 +94,8 @@ class BoundedSax {
   }
   bool open(bool array) {
     if (int(path_.size()) >= bounds_.max_depth) {
-      error_ = make_error(code("depth"), fmt::format("{}: JSON nested deeper than {} levels{}", bounds_.what,
-                                                     bounds_.max_depth, where(path_of(path_))));
+      error_ = make_error(code("depth"), one_line(fmt::format("{}: JSON nested deeper than {} levels{}", bounds_.what,
+                                                              bounds_.max_depth, where(path_of(path_)))));
       return false;
     }
     path_.push_back({array, {}, 0});
