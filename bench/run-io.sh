@@ -21,15 +21,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
-# Only what this script runs (hdrd, bench_io), with ccache when there is one; JOBS as
-# scripts/build.sh. NO_BUILD=1 times an existing build in BUILD_DIR as it is (its type is
-# printed in the JSON).
-if [ "${NO_BUILD:-0}" != 1 ]; then
-  bash scripts/install-deps.sh >/dev/null
-  launcher=(); command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DHDRD_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
-  ninja -C "$build_dir" -j "${JOBS:-$(nproc)}" hdrd bench_io >/dev/null
-fi
+bash bench/build-release.sh "$build_dir" hdrd bench_io
 build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
 
 need=()

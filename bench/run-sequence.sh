@@ -21,12 +21,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
-if [ "${NO_BUILD:-0}" != 1 ]; then
-  bash scripts/install-deps.sh >/dev/null
-  launcher=(); command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DHDRD_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
-  ninja -C "$build_dir" -j "${JOBS:-$(nproc)}" hdrd >/dev/null
-fi
+bash bench/build-release.sh "$build_dir" hdrd
 build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
 command -v oiiotool >/dev/null || { echo "run-sequence: oiiotool missing (apt-get install openimageio-tools)" >&2; exit 1; }
 

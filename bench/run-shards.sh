@@ -10,12 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
-if [ "${NO_BUILD:-0}" != 1 ]; then
-  bash scripts/install-deps.sh >/dev/null
-  launcher=(); command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DHDRD_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
-  ninja -C "$build_dir" -j "${JOBS:-$(nproc)}" hdrd >/dev/null
-fi
+bash bench/build-release.sh "$build_dir" hdrd
 pan_dir="$build_dir/bench-sequence/1080p"
 bash bench/make-pans.sh "$build_dir/bench-sequence"
 [ -f "$pan_dir/pan.023.exr" ] || { echo "run-shards: the 1080p pan is missing (bench/run-sequence.sh makes it)" >&2; exit 1; }

@@ -3,6 +3,7 @@
 // shards' job array and the merge job after it (deploy/slurm) — and its jobs' progress as
 // Slurm reports it (daemon/slurm.hpp). The plan must lie inside the asset root; OUTBASE is a
 // name in the dump directory. Without [cluster] slurm_scripts_dir: 503 cluster.unavailable.
+#include <functional>
 #include <mutex>
 #include <sstream>
 
@@ -131,19 +132,35 @@ void Service::post_cluster_submission(HttpRequest& http, std::shared_ptr<Respond
 }
 
 
+namespace {
+
+// GET and DELETE /v1/cluster/submissions/{id}: the client and the submission the path names.
+struct Target {
+  slurm::Client client;
+  std::string id;
+  slurm::Submission submission;
+};
+
+Result<Target> cluster_target(const Config& cfg, const std::string& path,
+                              const std::function<std::optional<slurm::Submission>(std::string_view)>& find) {
+  auto client = make_client(cfg);
+  if (!client) return client.error();
+  std::string id = path.substr(kPrefix.size());
+  const auto sub = find(id);
+  if (!sub) return make_error("cluster.not_found", fmt::format("no cluster submission {}", id.substr(0, 64)));
+  return Target{std::move(*client), std::move(id), *sub};
+}
+
+}  // namespace
+
 void Service::get_cluster_submission(HttpRequest& http, std::shared_ptr<Responder> responder) {
-  const auto cfg = config();
-  auto client = make_client(*cfg);
-  if (!client) return responder->reply(Reply::error(client.error()));
-  const std::string id = http.path.substr(kPrefix.size());
-  const auto sub = cluster_->find(id);
-  if (!sub)
-    return responder->reply(Reply::error(make_error("cluster.not_found", fmt::format("no cluster submission {}", id.substr(0, 64)))));
-  auto p = client->progress(*sub);
+  auto t = cluster_target(*config(), http.path, [this](std::string_view id) { return cluster_->find(id); });
+  if (!t) return responder->reply(Reply::error(t.error()));
+  auto p = t->client.progress(t->submission);
   if (!p) return responder->reply(Reply::error(p.error()));
   json shards = json::array();
-  for (const auto& t : p->shards) shards.push_back(task_json(t));
-  json j = submission_json(id, *sub);
+  for (const auto& task : p->shards) shards.push_back(task_json(task));
+  json j = submission_json(t->id, t->submission);
   j["state"] = slurm::to_string(p->state);
   j["counts"] = {{"pending", p->pending}, {"running", p->running}, {"completed", p->completed},
                  {"failed", p->failed}, {"cancelled", p->cancelled}};
@@ -154,15 +171,10 @@ void Service::get_cluster_submission(HttpRequest& http, std::shared_ptr<Responde
 }
 
 void Service::delete_cluster_submission(HttpRequest& http, std::shared_ptr<Responder> responder) {
-  const auto cfg = config();
-  auto client = make_client(*cfg);
-  if (!client) return responder->reply(Reply::error(client.error()));
-  const std::string id = http.path.substr(kPrefix.size());
-  const auto sub = cluster_->find(id);
-  if (!sub)
-    return responder->reply(Reply::error(make_error("cluster.not_found", fmt::format("no cluster submission {}", id.substr(0, 64)))));
-  if (auto ok = client->cancel(*sub); !ok) return responder->reply(Reply::error(ok.error()));
-  json j = submission_json(id, *sub);
+  auto t = cluster_target(*config(), http.path, [this](std::string_view id) { return cluster_->find(id); });
+  if (!t) return responder->reply(Reply::error(t.error()));
+  if (auto ok = t->client.cancel(t->submission); !ok) return responder->reply(Reply::error(ok.error()));
+  json j = submission_json(t->id, t->submission);
   j["state"] = "cancelled";
   responder->reply(json_reply(j));
 }
