@@ -56,6 +56,7 @@ struct EncodeSettings {
   std::shared_ptr<const grade::Grade> grade;
   bool dither = false;                     // ordered dither on code values (off in tests)
   bool keep_display_nits = false;          // fill EncodedFrame::display_nits (EXR dumps)
+  bool staged_only = false;                // every pixel on the staged path, not the fused kernel (tests)
   bool png_samples = true;                 // fill EncodedFrame::signal16 (16-bit PNG samples)
   int threads = 0;                         // 0: all hardware threads
 };

@@ -426,6 +426,13 @@ bool ui_touches_row(const PreparedUi& ui, int y) {
   return ui.active() && y + 1 > ui.y0 - ui.scale && y < ui.y0 + (ui.h + 1) * ui.scale;
 }
 
+// The display light of pixels [x, x + n) of row y for the EXR dump, when the frame keeps
+// it: `row` after stage_encode (which moved it into the displayable volume).
+void keep_display_light(const FrameJob& job, int y, int x, int n, const float* row) {
+  if (job.frame->display_nits)
+    std::memcpy(job.frame->display_nits->px(x, y), row, static_cast<std::size_t>(n) * 4 * sizeof(float));
+}
+
 // The staged path for single pixels of a fused row (its tail, out-of-gamut pixels), with
 // the UI composited when the row had one.
 void run_staged_pixels(const FrameJob& job, int y, int x, int n, const PreparedUi* ui, float* row,
@@ -434,6 +441,7 @@ void run_staged_pixels(const FrameJob& job, int y, int x, int n, const PreparedU
   if (ui)
     for (int i = 0; i < n; ++i) composite_ui_pixel(*ui, sample_ui(*ui, x + i, y), row + static_cast<std::size_t>(i) * 4);
   stage_encode(job, y, x, n, row, cll);
+  keep_display_light(job, y, x, n, row);
 }
 
 // The fused kernel over pixels [x0, x0 + n) of row y, compositing ui_row (from
@@ -450,6 +458,7 @@ void run_fused(const FrameJob& job, int y, int x0, int n, std::vector<float>& ro
   fr.out = job.frame->data.data() + static_cast<std::size_t>(y) * job.frame->stride_bytes + x0 * bpp;
   fr.signal16 = job.frame->signal16.empty() ? nullptr : job.frame->signal16.data() + base * 3;
   fr.fallback = fallback.data();
+  fr.display = job.frame->display_nits ? job.frame->display_nits->px(x0, y) : nullptr;
   fr.ui = ui_row;
   fr.ui_max = ui_row ? job.ui->pixels->max_light : 0.0f;
   kernels::fused_row(fr);
@@ -498,17 +507,18 @@ void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulat
         ui_row_for_kernel(*job.ui, y, x0, x1 - x0, ui_row);
         run_fused(job, y, x0, x1 - x0, row, fallback, cll, ui_row.data());
       } else if (x1 > x0) {
-        run_staged(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4);
+        float* ui_px = row.data() + static_cast<std::size_t>(x0) * 4;
+        run_staged(job, y, x0, x1 - x0, ui_px);
         composite_ui_row(*job.ui, y, w, row.data());
-        stage_encode(job, y, x0, x1 - x0, row.data() + static_cast<std::size_t>(x0) * 4, cll);
+        stage_encode(job, y, x0, x1 - x0, ui_px, cll);
+        keep_display_light(job, y, x0, x1 - x0, ui_px);
       }
       continue;
     }
     run_staged(job, y, 0, w, row.data());
     if (job.ui->active()) composite_ui_row(*job.ui, y, w, row.data());
     stage_encode(job, y, 0, w, row.data(), cll);  // moves the light into the displayable volume first
-    if (job.frame->display_nits)
-      std::memcpy(job.frame->display_nits->px(0, y), row.data(), row.size() * sizeof(float));
+    keep_display_light(job, y, 0, w, row.data());
   }
 }
 
@@ -516,7 +526,7 @@ void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulat
 std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   const auto& p = *job.p;
   const auto& t = p.settings.target;
-  if (p.settings.grade || p.settings.dither || p.settings.keep_display_nits) return std::nullopt;
+  if (p.settings.grade || p.settings.dither || p.settings.staged_only) return std::nullopt;
   if (t.mode == Mode::hlg) return std::nullopt;
   kernels::FusedRow r;
   switch (job.tone->kind) {
@@ -544,6 +554,10 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
     r.lift_toe_slope = job.tone->lift_toe_slope;
   }
   r.m_container = job.container_is_working ? nullptr : job.to_c.m;
+  // The display light the dump keeps: to_volume's cube clamp and black floor (HLG, whose
+  // volume is not a cube, never comes here).
+  r.display_hi = static_cast<float>(t.peak_nits);
+  r.display_lo = detail::has_black_floor(t) ? static_cast<float>(t.black_nits) : 0.0f;
   if (t.mode == Mode::scrgb) {
     r.out_kind = kernels::FusedOut::scrgb;
     r.gamut_lo = -std::numeric_limits<float>::infinity();

@@ -143,7 +143,9 @@ struct CodeLight {
       const VF t = hn::ConvertTo(df, hn::And(code, hn::Set(di, 31)));
       VF v{_mm512_permutex2var_ps(lo[4], seg, hi[4])};
       for (int i = 3; i >= 0; --i) v = hn::MulAdd(v, t, VF{_mm512_permutex2var_ps(lo[i], seg, hi[i])});
-      return v;
+      // The fit is within 1e-3 cd/m2 of the table, but may dip below 0 near code 0 (black
+      // read -1.3e-5 cd/m2): light is never negative, so MaxFALL never is.
+      return hn::Max(v, hn::Zero(df));
     }
 #endif
     return hn::GatherIndex(df, table, code);
@@ -195,6 +197,7 @@ struct RuntimeSpec {
   bool cll() const { return r->code_to_nits != nullptr; }
   bool signal16() const { return r->signal16 != nullptr; }
   bool lift() const { return r->lift.table != nullptr; }
+  bool display() const { return r->display != nullptr; }
   static constexpr bool below_top() { return false; }
 };
 
@@ -208,6 +211,7 @@ struct Hdr10Spec {
   static constexpr bool cll() { return true; }
   static constexpr bool signal16() { return false; }
   static constexpr bool lift() { return false; }
+  static constexpr bool display() { return false; }
   // No code input lies above the quantiser's table, so its upper clamp goes: the ratio of
   // max(RGB) keeps each channel at or below the peak (the curves never pass it:
   // tonemap_test; 0.1 % covers the table's interpolation), and the UI adds at most ui_max.
@@ -216,7 +220,7 @@ struct Hdr10Spec {
     const RuntimeSpec s{&r};
     if (!(s.half() == half() && s.tone() == tone() && s.container() == container() && s.gamut() == gamut() &&
           s.out() == out() && s.quant() == quant() && s.cll() == cll() && s.signal16() == signal16() &&
-          s.lift() == lift()))
+          s.lift() == lift() && s.display() == display()))
       return false;
     const float top = std::bit_cast<float>(r.codes.base_bits + r.codes.top_rel);
     return r.peak * 1.001f + (r.ui ? r.ui_max : 0.0f) < top;
@@ -400,6 +404,7 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
       const auto h_b = hn::BitCast(du16, hn::DemoteTo(dh, hn::Mul(B, k80)));
       hn::StoreInterleaved4(h_r, h_g, h_b, hn::Set(du16, 0x3C00), du16,
                             reinterpret_cast<std::uint16_t*>(r.out) + static_cast<std::size_t>(x) * 4);
+      if (spec.display()) hn::StoreInterleaved4(R, G, B, hn::Set(df, 1.0f), df, r.display + static_cast<std::size_t>(x) * 4);
       const VF m = hn::IfThenElseZero(ok, work_max);
       vmax = hn::Max(vmax, m);
       vsum = hn::Add(vsum, m);
@@ -427,6 +432,13 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
         hn::Store(G, df, buf_g + (x - x0));
         hn::Store(B, df, buf_b + (x - x0));
         if (spec.gamut()) hn::Store(hn::IfThenElseZero(ok, one), df, buf_ok + (x - x0));
+        if (spec.display()) {
+          // What the staged path's to_volume leaves (the pixels listed for the exact path
+          // are overwritten by it).
+          const VF lo = hn::Set(df, r.display_lo), hi = hn::Set(df, r.display_hi);
+          auto shown = [&](VF v) { return hn::Min(hn::Max(v, lo), hi); };
+          hn::StoreInterleaved4(shown(R), shown(G), shown(B), one, df, r.display + static_cast<std::size_t>(x) * 4);
+        }
       }
       for (int x = x0; x < x1; x += N) {
         const VF R = hn::Load(df, buf_r + (x - x0)), G = hn::Load(df, buf_g + (x - x0)), B = hn::Load(df, buf_b + (x - x0));

@@ -65,6 +65,12 @@ struct FusedRow {
   // MaxFALL: code_to_nits as a quartic in code % 32 per 32 codes, 5 x 32 floats
   // (coefficient i of segment s at [32 i + s]), or null (then the table itself).
   const float* code_nits_poly = nullptr;
+  // The display light of the row (the EXR dump's EncodedFrame::display_nits), or null:
+  // RGBA floats from the row start, RGB written and A set to 1. Container nits clamped to
+  // [display_lo, display_hi] (the displayable volume with its black floor), except scRGB,
+  // whose light is written as it is (negatives allowed).
+  float* display = nullptr;
+  float display_lo = 0, display_hi = 0;
   // results
   double max_nits = 0, sum_nits = 0;   // CLL of the pixels handled here
   int* fallback = nullptr;             // capacity n: x of pixels left for the exact path

@@ -239,7 +239,7 @@ TEST(Bt2390Lift, EncoderCodesAreTheReportsPerChannel) {
     s.target = t;
     s.tone.curve = "bt2390";
     s.tone.params = {{"source_peak_nits", 1000}, {"black_lift", 1}};
-    s.keep_display_nits = staged;  // the staged path; otherwise the fused kernel
+    s.staged_only = staged;  // the staged path; otherwise the fused kernel
     SceneInput in;
     in.image = &img;
     in.to_working = color::Mat3::identity();
@@ -281,7 +281,7 @@ TEST(SdrContent, UiDecodesWithTheSdrContentEotf) {
       s.target = t;
       s.tone.curve = "clip";
       s.ui.overlay = overlay;
-      s.keep_display_nits = !fused;
+      s.staged_only = !fused;
       SceneInput in;
       in.image = &black;
       auto f = encode_frame(in, s);

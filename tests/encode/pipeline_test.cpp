@@ -284,7 +284,7 @@ TEST(Encode, FusedKernelMatchesStagedPath) {
     for (const char* curve : {"clip", "pq-shoulder", "hable", "reinhard"}) {
       auto fast = settings(m, curve);
       auto staged = fast;
-      staged.keep_display_nits = true;
+      staged.staged_only = true;
       const auto a = encode(img, fast), b = encode(img, staged);
       ASSERT_EQ(a.data.size(), b.data.size());
       int differ = 0;
@@ -361,7 +361,7 @@ TEST(Encode, UiRowsMatchTheStagedPath) {
     fast.ui.scale = scale;
     fast.ui.dim = 0.3;
     auto staged = fast;
-    staged.keep_display_nits = true;
+    staged.staged_only = true;
     const auto a = encode(img, fast), b = encode(img, staged);
     int off = 0;
     for (int y = 0; y < img.height; ++y)

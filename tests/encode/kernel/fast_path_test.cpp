@@ -69,7 +69,7 @@ TEST_P(FusedKernel, EveryCompiledTargetMatchesTheStagedPath) {
   if (GetParam().half) in.half = &half;
   else in.image = &img;
   auto staged = s;
-  staged.keep_display_nits = true;  // forces the staged path
+  staged.staged_only = true;
   const auto want = encode_frame(in, staged);
   ASSERT_TRUE(want.ok());
   hwy::SetSupportedTargetsForTest(0);  // all of them, whatever an earlier failure left
@@ -127,7 +127,7 @@ TEST(FusedKernel, BrightUiOverABrightDisplayKeepsItsCodes) {
     SceneInput in;
     in.half = &half;
     auto staged = s;
-    staged.keep_display_nits = true;
+    staged.staged_only = true;
     const auto want = encode_frame(in, staged);
     const auto got = encode_frame(in, s);
     ASSERT_TRUE(want.ok() && got.ok());
@@ -184,7 +184,7 @@ TEST(FusedKernel, KinkedTablesAndTheBlackLiftOnEveryTarget) {
     SceneInput in;
     in.image = &img;
     auto staged = s;
-    staged.keep_display_nits = true;
+    staged.staged_only = true;
     const auto want = encode_frame(in, staged);
     ASSERT_TRUE(want.ok());
     hwy::SetSupportedTargetsForTest(0);
@@ -206,6 +206,117 @@ TEST(FusedKernel, KinkedTablesAndTheBlackLiftOnEveryTarget) {
         if (transfer::pq_eotf(std::max(a, b) / 65535.0) < 1e-4) continue;
         ASSERT_LE(std::abs(a - b), 2) << c.name << " " << hwy::TargetName(target) << " 16-bit sample " << i;
       }
+    }
+    hwy::SetSupportedTargetsForTest(0);
+  }
+}
+
+// The EXR dump's display light (EncodedFrame::display_nits) from the fused kernel, on every
+// compiled target, for every mode it runs (HLG is staged throughout): the staged path's
+// light and, where no UI is composited, the double-precision reference's, within relative
+// 2^-14 (an eighth of half's rounding) + 1e-6 cd/m2. Both paths read the same tables; what
+// differs is float rounding (FMA against separate multiply-adds), largest for saturated
+// colours whose Rec.2020 -> Rec.709 matrix cancels (1.2e-5 relative seen).
+// The frame mixes stops from deep shadow to far above the peak, saturated Rec.2020 colours
+// (outside Rec.709: SDR and scRGB send them to the exact path, whose light must land in
+// the dump too), NaN and Inf, an odd width (scalar tails) and a UI over part of it.
+TEST(FusedKernel, DisplayLightForTheExrDumpOnEveryTarget) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> stops(-20, 8), unit(0, 1);
+  Image img(141, 12);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    const float v = std::exp2(stops(rng));
+    const bool saturated = i % 7 == 0;
+    for (int c = 0; c < 3; ++c) img.rgba[i * 4 + c] = saturated ? v * (c == static_cast<int>(i % 3) ? 1 : 0.01f) : v * (0.3f + unit(rng));
+    img.rgba[i * 4 + 3] = 1;
+  }
+  img.rgba[4 * 20] = std::numeric_limits<float>::quiet_NaN();
+  img.rgba[4 * 33 + 2] = std::numeric_limits<float>::infinity();
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 24;
+  overlay->height = 3;
+  for (int i = 0; i < 72; ++i) overlay->rgba.insert(overlay->rgba.end(), {0.9f, 0.9f, 0.2f, (i % 4) / 3.0f});
+  struct ModeCase { Mode mode; Range range; double black; const char* curve; };
+  const ModeCase cases[] = {{Mode::hdr10, Range::full, 0.005, ""},        {Mode::hdr10, Range::narrow, 0.005, "bt2390"},
+                            {Mode::hdr10, Range::full, 0.0, "hable"},     {Mode::sdr, Range::full, 0.2, ""},
+                            {Mode::sdr_bt1886, Range::full, 0.1, ""},     {Mode::sdr_bt1886, Range::narrow, 0.0, ""},
+                            {Mode::scrgb, Range::full, 0.0, ""}};
+  for (const auto& mc : cases) {
+    for (const bool ui : {false, true}) {
+      EncodeSettings s;
+      s.target = default_target(mc.mode);
+      s.target.range = mc.range;
+      s.target.black_nits = mc.black;
+      s.tone.curve = mc.curve;
+      s.keep_display_nits = true;
+      s.threads = 1;
+      if (ui) {
+        s.ui.overlay = overlay;
+        s.ui.x = 37, s.ui.y = 4;
+      }
+      const std::string what = std::string(to_string(mc.mode)) + " " + std::string(to_string(mc.range)) + " " + mc.curve +
+                               (ui ? " with UI" : "");
+      SceneInput in;
+      in.image = &img;
+      auto staged = s;
+      staged.staged_only = true;
+      const auto want = encode_frame(in, staged);
+      ASSERT_TRUE(want.ok()) << what;
+      auto prepared = prepare_pipeline(in, s);
+      ASSERT_TRUE(prepared.ok()) << what;
+      hwy::SetSupportedTargetsForTest(0);
+      for (const auto target : hwy::SupportedAndGeneratedTargets()) {
+        hwy::SetSupportedTargetsForTest(target);
+        const auto got = encode_frame(in, s);
+        ASSERT_TRUE(got.ok() && got->display_nits) << what;
+        for (int y = 0; y < img.height; ++y)
+          for (int x = 0; x < img.width; ++x) {
+            const float* a = got->display_nits->px(x, y);
+            const float* b = want->display_nits->px(x, y);
+            const bool under_ui = ui && y >= s.ui.y - 1 && y <= s.ui.y + overlay->height && x >= s.ui.x - 1 &&
+                                  x <= s.ui.x + overlay->width;
+            const float* in_px = img.px(x, y);
+            const bool finite = std::isfinite(in_px[0] + in_px[1] + in_px[2]);
+            const color::Vec3 ref = reference_display_nits(*prepared, {in_px[0], in_px[1], in_px[2]});
+            for (int c = 0; c < 3; ++c) {
+              // NaN and Inf pixels (the documented rule: 0 and 1e30): finite light; the
+              // paths differ in the ~1e-6 cd/m2 a huge channel leaves in the others.
+              ASSERT_TRUE(std::isfinite(a[c])) << what << " (" << x << ", " << y << ")";
+              if (!finite) continue;
+              ASSERT_NEAR(a[c], b[c], std::ldexp(std::abs(b[c]), -14) + 1e-6)
+                  << what << " " << hwy::TargetName(target) << " (" << x << ", " << y << ") channel " << c;
+              if (!under_ui) {
+                ASSERT_NEAR(a[c], (&ref.x)[c], std::ldexp(std::abs((&ref.x)[c]), -14) + 1e-6)
+                    << what << " " << hwy::TargetName(target) << " (" << x << ", " << y << ") channel " << c
+                    << " against the reference";
+              }
+            }
+            ASSERT_EQ(a[3], 1.0f);
+          }
+      }
+      hwy::SetSupportedTargetsForTest(0);
+    }
+  }
+}
+
+// A black frame measures no light on any target: MaxFALL's fitted decode (AVX-512) dipped
+// to -1.3e-5 cd/m2 at code 0, a negative frame average in the sidecar.
+TEST(FusedKernel, BlackFrameMeasuresNoLightOnEveryTarget) {
+  const Image black(64, 4);
+  SceneInput in;
+  in.image = &black;
+  for (const Range range : {Range::full, Range::narrow}) {
+    EncodeSettings s;
+    s.target = default_target(Mode::hdr10);
+    s.target.range = range;
+    s.threads = 1;
+    hwy::SetSupportedTargetsForTest(0);
+    for (const auto target : hwy::SupportedAndGeneratedTargets()) {
+      hwy::SetSupportedTargetsForTest(target);
+      const auto f = encode_frame(in, s);
+      ASSERT_TRUE(f.ok());
+      EXPECT_EQ(f->content_light.max_cll_nits, 0.0) << hwy::TargetName(target);
+      EXPECT_EQ(f->content_light.max_fall_nits, 0.0) << hwy::TargetName(target);
     }
     hwy::SetSupportedTargetsForTest(0);
   }
