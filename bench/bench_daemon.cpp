@@ -1,10 +1,12 @@
 // The daemon's cost: a request's round trip through `hdrd serve` (Unix socket, HTTP,
 // queue, worker hand-offs, response) versus the same work in-process (render 256x256 with
-// the renderer, encode HDR10, PNG), a bare GET round trip, and throughput with 1, 2, 4
-// and 8 concurrent clients. Results: docs/performance-daemon.md.
+// the renderer, encode HDR10, PNG; and an EXR upload to POST /v1/encode against the same
+// frame job in-process), a bare GET round trip, and throughput with 1, 2, 4 and 8
+// concurrent clients. Results: docs/performance-daemon.md, docs/performance.md.
 //
 //   build/bench/bench_daemon --benchmark_min_time=2
-//   HDRD_BINARY=path/to/hdrd overrides where the daemon program is looked for.
+//   HDRD_BINARY=path/to/hdrd overrides where the daemon program is looked for;
+//   HDRD_BENCH_EXR=IN.exr is the upload of BM_EncodeOverhead_Interleaved (skipped without).
 #include <benchmark/benchmark.h>
 
 #include <fcntl.h>
@@ -29,6 +31,8 @@
 
 #include "daemon/client.hpp"
 #include "encode/io/io.hpp"
+#include "job/frame_job.hpp"
+#include "job/request.hpp"
 #include "encode/pipeline.hpp"
 #include "shading/renderer.hpp"
 
@@ -231,6 +235,69 @@ void BM_Overhead_Interleaved(benchmark::State& state) {
   state.counters["transport_ms"] = median(transport);
 }
 BENCHMARK(BM_Overhead_Interleaved)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(100);
+
+// An EXR upload (HDRD_BENCH_EXR, e.g. bench/run-io.sh's 4K file) answered as an HDR10 PNG:
+// POST /v1/encode?mode=hdr10 against the same frame job in this process (the request
+// parsed the same way, the file's bytes already in memory on both sides: decode, meter,
+// encode, PNG), alternated, medians. The difference is the daemon's own cost: the upload
+// and the answer through the socket, HTTP, the queue and the hand-offs.
+void BM_EncodeOverhead_Interleaved(benchmark::State& state) {
+  const char* path = std::getenv("HDRD_BENCH_EXR");
+  if (!path) {
+    state.SkipWithError("set HDRD_BENCH_EXR to an EXR file");
+    return;
+  }
+  std::ifstream f(path, std::ios::binary);
+  const std::string exr((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (exr.empty()) {
+    state.SkipWithError("HDRD_BENCH_EXR: cannot read the file");
+    return;
+  }
+  auto local = [&]() -> hdrd::Result<std::vector<std::uint8_t>> {
+    hdrd::job::ParseContext ctx;
+    ctx.source = hdrd::job::Source::encode;
+    ctx.reach = hdrd::job::Reach::daemon;
+    auto request = hdrd::job::parse_request_json(nlohmann::json{{"display", {{"mode", "hdr10"}}}}, ctx);
+    if (!request) return request.error();
+    hdrd::job::EncodeInput input;
+    input.bytes = exr;  // the daemon's side starts from bytes in memory too
+    input.name = "upload";
+    auto job = hdrd::job::FrameJob::create(std::move(*request), {}, std::move(input), std::vector{hdrd::job::Output::png});
+    if (!job) return job.error();
+    auto result = (*job)->finish();
+    if (!result) return result.error();
+    return std::move(result->files.at(0).bytes);
+  };
+  auto c = single_worker_daemon().client();
+  std::vector<double> local_ms, daemon_ms, daemon_encode;
+  using clock = std::chrono::steady_clock;
+  auto ms = [](clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  for (auto _ : state) {
+    const auto t0 = clock::now();
+    auto png = local();
+    const auto t1 = clock::now();
+    auto d = c.request("POST", "/v1/encode?mode=hdr10", exr, {{"Content-Type", "image/x-exr"}, {"Accept", "image/png"}});
+    const auto t2 = clock::now();
+    if (!png || !d || d->status != 200 || d->body.size() != png->size()) {
+      static std::string why;  // SkipWithError keeps the pointer
+      why = fmt::format("daemon answer ({} bytes, HTTP {}) differs from the in-process PNG ({} bytes{})", d ? d->body.size() : 0,
+                        d ? d->status : 0, png ? png->size() : 0, png ? "" : ": " + png.error().message);
+      state.SkipWithError(why.c_str());
+      return;
+    }
+    local_ms.push_back(ms(t1 - t0));
+    daemon_ms.push_back(ms(t2 - t1));
+    daemon_encode.push_back(header_ms(*d, "x-hdrd-encode-ms"));
+  }
+  const double l = median(local_ms), dm = median(daemon_ms);
+  state.counters["inprocess_ms"] = l;
+  state.counters["daemon_ms"] = dm;
+  state.counters["overhead_ms"] = dm - l;
+  state.counters["overhead_pct"] = l > 0 ? 100.0 * (dm - l) / l : 0;
+  state.counters["daemon_encode_ms"] = median(daemon_encode);
+  state.counters["upload_mb"] = exr.size() / 1e6;
+}
+BENCHMARK(BM_EncodeOverhead_Interleaved)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
 
 // The transport alone: a GET answered on the HTTP thread (no queue, no workers).
 void BM_Daemon_StatusRoundTrip(benchmark::State& state) {

@@ -158,13 +158,13 @@ void Service::handle(HttpRequest& r, std::shared_ptr<Responder> responder) noexc
 void Service::finished(const HttpRequest& r, const Reply& reply, std::size_t body_bytes) noexcept {
   try {
     const double s = seconds_since(r.started);
-    metrics_.request_finished(endpoint_label(r), reply.status, s, body_bytes, reply.body ? reply.body->size() : 0);
+    metrics_.request_finished(endpoint_label(r), reply.status, s, body_bytes, reply.body_size());
     if (config()->log.access_log) {
       const std::string peer = r.peer ? fmt::format("uid={} gid={} pid={}", r.peer->uid, r.peer->gid, r.peer->pid)
                                       : (r.tcp ? "tcp" : "unix");
       spdlog::info("#{} {} {} {} -> {} {} {} B {:.1f} ms", r.id, peer, r.method, r.path.substr(0, 200), reply.status,
                    reply.error_code.empty() ? reply.content_type : reply.error_code,
-                   reply.body ? reply.body->size() : 0, s * 1e3);
+                   reply.body_size(), s * 1e3);
     }
   } catch (...) {
   }

@@ -97,9 +97,11 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
   const std::string key = canonical_key(request->canonical());
 
   job::JobOptions jo = daemon_job_options(*cfg);
+  // The upload's identity for coalescing, before its bytes move into the job (no copy).
+  const std::string upload_key = exr.empty() ? "" : fmt::format("|exr:{}:{:016x}", exr.size(), fnv1a(exr));
   job::EncodeInput input;
   if (source == job::Source::encode) {
-    input.bytes.assign(exr.begin(), exr.end());
+    input.bytes = std::move(exr);
     input.name = "upload";
   }
   auto st = std::make_shared<FrameJobState>();
@@ -123,12 +125,11 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
   JobSpec spec;
   spec.deadline = request_deadline(http, timeout_s, *cfg);
   // What the job will allocate at its peak, checked against the budget at admission (memory.hpp).
-  auto memory = memory_estimate(*st->job, st->reply, http.body.size(), exr, cfg->limits);
+  auto memory = memory_estimate(*st->job, st->reply, http.body.size(), st->job->input().bytes, cfg->limits);
   if (!memory) return responder->reply(Reply::error(memory.error()));
   spec.memory_bytes = *memory;
   if (!dump)
-    spec.key = key + "|" + std::string(job::output_info(*st->reply).content_type) +
-               (exr.empty() ? "" : fmt::format("|exr:{}:{:016x}", exr.size(), fnv1a(exr)));
+    spec.key = key + "|" + std::string(job::output_info(*st->reply).content_type) + upload_key;
   const bool renders = st->job->needs_renderer();
   if (renders) {
     spec.render = [st](RenderResource* res, const JobControl& control) -> Result<void> {

@@ -58,13 +58,13 @@ std::vector<std::pair<std::string, std::string>> frame_headers(const job::FrameR
   return h;
 }
 
-Result<Reply> frame_reply(const job::FrameResult& result, job::Output output) {
-  for (const auto& file : result.files) {
+Result<Reply> frame_reply(job::FrameResult& result, job::Output output) {
+  for (auto& file : result.files) {
     if (file.id != output) continue;
     Reply r;
     r.content_type = std::string(job::output_info(output).content_type);
-    r.body = std::make_shared<const std::string>(file.bytes.begin(), file.bytes.end());
     r.headers = frame_headers(result);
+    r.bytes = std::make_shared<const std::vector<std::uint8_t>>(std::move(file.bytes));
     return r;
   }
   return make_error("internal", fmt::format("the job did not make its {} output", job::output_info(output).name));

@@ -18,7 +18,8 @@ namespace hdrd::daemon {
 // MaxCLL/MaxFALL, mastering, where the levels came from, timings, warnings).
 std::vector<std::pair<std::string, std::string>> frame_headers(const job::FrameResult& result);
 
-Result<Reply> frame_reply(const job::FrameResult& result, job::Output output);
+// The output's bytes move into the reply (the result keeps the rest).
+Result<Reply> frame_reply(job::FrameResult& result, job::Output output);
 
 // Only names checked by the request parser (the `name` setting) reach this. A full disk is
 // io.no_space (507), naming the directory.

@@ -144,6 +144,7 @@ std::string header_safe(std::string v) {
 }
 
 void free_body(void* cls) { delete static_cast<std::shared_ptr<const std::string>*>(cls); }
+void free_bytes(void* cls) { delete static_cast<std::shared_ptr<const std::vector<std::uint8_t>>*>(cls); }
 
 }  // namespace
 
@@ -304,6 +305,14 @@ int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
     resp = MHD_create_response_from_fd(r.file->size, fd);
     if (!resp) {
       ::close(fd);
+      return MHD_NO;
+    }
+  } else if (r.bytes) {  // MHD sends from the job's own buffer and frees it with the response
+    auto* holder = new std::shared_ptr<const std::vector<std::uint8_t>>(r.bytes);
+    resp = MHD_create_response_from_buffer_with_free_callback_cls(
+        (*holder)->size(), const_cast<std::uint8_t*>((*holder)->data()), &free_bytes, holder);
+    if (!resp) {
+      delete holder;
       return MHD_NO;
     }
   } else {

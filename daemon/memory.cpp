@@ -28,10 +28,10 @@ bool float_output(std::optional<job::Output> reply) {
 }
 
 // Encode and reply for a w x h frame, with the display light when the answer needs it;
-// serialised twice at the peak: the encoder's buffer and the reply body (or file).
+// serialised once: the encoder's buffer moves into the reply body (or is written to a file).
 std::uint64_t encode_bytes(std::optional<job::Output> reply, std::uint64_t pixels) {
   const bool floats = float_output(reply);
-  return pixels * (kFrameBpp + (floats ? kFloatBpp : 0) + 2 * (floats ? 16 : 8));
+  return pixels * (kFrameBpp + (floats ? kFloatBpp : 0) + (floats ? 16 : 8));
 }
 
 // A setting of the request's source (ui.* is not one of a pattern's).

@@ -36,6 +36,11 @@ struct Reply {
   std::vector<std::pair<std::string, std::string>> headers;
   std::string error_code;  // set for error replies (access log, metrics)
   std::shared_ptr<const FileBody> file;  // set: the body is this file (`body` stays empty)
+  // Set: the body is these bytes (`body` stays empty): a frame's output moved out of its job
+  // and handed to the HTTP layer as it is, never copied (coalesced requests share it).
+  std::shared_ptr<const std::vector<std::uint8_t>> bytes;
+
+  std::uint64_t body_size() const { return file ? file->size : bytes ? bytes->size() : body ? body->size() : 0; }
 
   static Reply json(unsigned status, std::string text) {
     Reply r;

@@ -120,7 +120,7 @@ exposure::Mode exposure_mode(const FrameRequest& r, bool illuminance_known) {
 }
 
 Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarget& target, int threads,
-                                       std::vector<std::string>* warnings) {
+                                       std::vector<std::string>* warnings, LoadedResources* resources) {
   EncodeSettings s;
   s.target = target;
   s.threads = threads;
@@ -144,12 +144,21 @@ Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarge
   ex.ignore_bright_fraction = r.number("exposure.ignore_bright_fraction");
   if (!r.is_null("exposure.illuminance_lux")) ex.illuminance_lux = r.number("exposure.illuminance_lux");
 
+  if (resources && resources->loaded) {
+    s.ui = resources->ui;
+    s.grade = resources->grade;
+    if (warnings) warnings->insert(warnings->end(), resources->warnings.begin(), resources->warnings.end());
+    return s;
+  }
   auto ui = load_ui(r);
   if (!ui) return ui.error();
   s.ui = std::move(*ui);
-  auto g = load_grade(r, target, warnings);
+  std::vector<std::string> grade_warnings;
+  auto g = load_grade(r, target, &grade_warnings);
   if (!g) return g.error();
   s.grade = std::move(*g);
+  if (warnings) warnings->insert(warnings->end(), grade_warnings.begin(), grade_warnings.end());
+  if (resources) *resources = {true, s.ui, s.grade, std::move(grade_warnings)};
   return s;
 }
 

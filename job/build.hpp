@@ -26,8 +26,9 @@ Result<void> check_pattern_mode(const FrameRequest& r, const DisplayTarget& targ
 // Tone curve, exposure settings, gamut, dither, the grade (loaded) and the UI overlay
 // (decoded, its declared size checked first). The exposure mode is decided by
 // exposure_mode() once the source is known.
+// `resources` (a sequence's): loaded on the first call, reused after.
 Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarget& target, int threads,
-                                       std::vector<std::string>* warnings);
+                                       std::vector<std::string>* warnings, LoadedResources* resources = nullptr);
 
 // The exposure rule (exposure.mode "auto", RTR4 §8.2.2: meter the light, not the pixels):
 // camera when ev100 is given; light-based when the illuminance is known (a render's

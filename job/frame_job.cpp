@@ -141,7 +141,7 @@ Result<void> check_outputs(const std::vector<Output>& outputs, Source source, Mo
 
 // The encoder settings of the request, keeping what the asked-for outputs need.
 Result<EncodeSettings> job_settings(FrameJob::State& st) {
-  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings);
+  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings, st.options.resources.get());
   if (!settings) return settings.error();
   settings->keep_display_nits = st.wants(&OutputInfo::needs_display_nits);
   settings->png_samples = st.wants(&OutputInfo::needs_signal16);
@@ -165,6 +165,7 @@ bool FrameJob::needs_renderer() const { return s_->request.source == Source::ren
 const DisplayTarget& FrameJob::target() const { return s_->target; }
 const FrameRequest& FrameJob::request() const { return s_->request; }
 const std::vector<Output>& FrameJob::outputs() const { return s_->outputs; }
+const EncodeInput& FrameJob::input() const { return s_->input; }
 
 Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOptions options, EncodeInput input,
                                                    std::optional<std::vector<Output>> outputs) {
@@ -337,9 +338,13 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   const double c0 = process_cpu_ms();
   // Half files decode straight to half pixels, which the encoder reads as they are.
   const io::ExrReadOptions read{.half_pixels = true};
-  auto exr = st.input.bytes.empty() ? io::read_exr(st.input.path, read) : io::read_exr_memory(st.input.bytes, read);
+  const std::span upload(reinterpret_cast<const std::uint8_t*>(st.input.bytes.data()), st.input.bytes.size());
+  auto exr = upload.empty() ? io::read_exr(st.input.path, read) : io::read_exr_memory(upload, read);
   if (!exr) return exr.error();
   st.timings["read"] = ms_since(t0);
+  // An upload's bytes are not needed once decoded: freed before the encoder's buffers.
+  const std::size_t upload_bytes = st.input.bytes.size();
+  std::string().swap(st.input.bytes);
   const double c1 = process_cpu_ms();
   st.timings["read_cpu"] = c1 - c0;
   for (auto& w : exr->warnings) st.warnings.push_back(std::move(w));
@@ -377,7 +382,7 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
                           {"compression", st.exr->compression},
                           {"width", st.exr->width()},
                           {"height", st.exr->height()}};
-  if (!st.input.bytes.empty()) f->settings["input"]["bytes"] = st.input.bytes.size();
+  if (upload_bytes > 0) f->settings["input"]["bytes"] = upload_bytes;
   st.cpu_input = in;
   return f;
 }

@@ -39,6 +39,15 @@ struct FrameFacts {
 };
 
 // What the front end provides beyond the request.
+// What a request loads from files (job/build.cpp encode_settings), kept between the frames
+// of a sequence. Filled by the first frame; the frames of one sequence run one at a time.
+struct LoadedResources {
+  bool loaded = false;
+  UiSettings ui;
+  std::shared_ptr<const grade::Grade> grade;
+  std::vector<std::string> warnings;  // the loading's warnings, repeated for every frame
+};
+
 struct JobOptions {
   int threads = 0;                          // encoder threads (0: all cores)
   // JSON scenes resolve their relative file names here; `scene_files` false confines a
@@ -53,12 +62,16 @@ struct JobOptions {
   std::optional<double> time_s;              // a sequence's frame time; unset: the request's start_s
   std::optional<double> previous_time_s;     // the frame before's: a scene cut keyed between the two marks this one
   std::function<Result<void>(const SceneInput& metered, PreparedPipeline& prepared, const FrameFacts& facts)> temporal;
+  // Set by a sequence: its frames share one request, so the UI overlay and the grade are
+  // loaded by the first frame and reused by the rest (the overlay's conversion to display
+  // light is cached by object, so it is converted once too).
+  std::shared_ptr<LoadedResources> resources;
 };
 
 // The EXR of an encode request: a file (CLI) or the uploaded bytes (daemon).
 struct EncodeInput {
   std::filesystem::path path;
-  std::vector<std::uint8_t> bytes;
+  std::string bytes;                        // the file in memory (an upload), instead of `path`
   std::string name;                         // shown in messages and the sidecar
 };
 
@@ -97,6 +110,7 @@ class FrameJob {
   const DisplayTarget& target() const;         // resolved levels
   const FrameRequest& request() const;
   const std::vector<Output>& outputs() const;
+  const EncodeInput& input() const;           // encode requests: the file, or its bytes
 
   // Render stage (render requests, on the renderer's thread): loads the grade and the UI,
   // renders, meters, encodes on the GPU when the rule allows, reads back what the CPU needs.

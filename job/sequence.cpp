@@ -351,8 +351,10 @@ class SequenceSink {
     const bool start = item.decision.scene_start;
     const auto t1 = Clock::now();
     const FrameLight light = metadata_->light_of(f);
-    if (auto ok = metadata_->add(light, start); !ok) return ok.error();
-    if (options_.shard) lights_.push_back(light_json(light));
+    if (options_.shard)  // the merge adds the shards' lights to the sequence's metadata
+      lights_.push_back(light_json(light));
+    else if (auto ok = metadata_->add(light, start); !ok)
+      return ok.error();
     add_time("metadata", t1);
     if (writer_) {
       const auto t2 = Clock::now();
@@ -541,6 +543,8 @@ struct FrameLoop {
   temporal::TemporalTone* tone = nullptr;                      // in line
   const std::vector<temporal::FrameDecision>* track = nullptr;  // decided before (a plan)
   std::vector<temporal::FrameDecision>* decided = nullptr;      // analysis: the decisions
+  // The UI and the grade, loaded by the first frame (frames run one at a time).
+  std::shared_ptr<LoadedResources> resources = std::make_shared<LoadedResources>();
 };
 
 Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in, PreparedPipeline& p,
@@ -588,6 +592,7 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
     item.index = i;
     item.time_s = loop.src.start_s + i * dt;
     JobOptions jo = loop.options.job;
+    jo.resources = loop.resources;
     jo.time_s = item.time_s;
     if (i > 0) jo.previous_time_s = item.time_s - dt;
     jo.temporal = [&](const SceneInput& in, PreparedPipeline& p, const FrameFacts& facts) {
