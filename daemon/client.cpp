@@ -129,7 +129,7 @@ Result<std::size_t> Client::fill(Clock::time_point deadline, Clock::time_point s
   }
 }
 
-Result<ClientResponse> Client::read_response(bool head_request) {
+Result<ClientResponse> Client::read_response(bool head_request, const BodySink* sink, bool& delivered) {
   const auto start = Clock::now();
   const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.timeout_s));
   for (;;) {  // skips 1xx interim responses
@@ -160,6 +160,33 @@ Result<ClientResponse> Client::read_response(bool head_request) {
       if (!fresh) it->second += ", " + trim(line.substr(colon + 1));
     }
     if (r.status >= 100 && r.status < 200) continue;
+    // The first n bytes of buffer_ are body: to the sink (a 2xx download) or the response.
+    const bool stream = sink && r.status >= 200 && r.status < 300;
+    auto take = [&](std::size_t n) -> Result<void> {
+      if (n == 0) return {};
+      if (stream) {
+        delivered = true;
+        if (auto ok = (*sink)(std::string_view(buffer_.data(), n)); !ok) return ok.error();
+      } else {
+        r.body.append(buffer_, 0, n);
+      }
+      buffer_.erase(0, n);
+      return {};
+    };
+    // `left` bytes of body, as they arrive.
+    auto take_exactly = [&](std::size_t left, const char* closed) -> Result<void> {
+      while (left > 0) {
+        if (buffer_.empty()) {
+          auto n = fill(deadline, start);
+          if (!n) return n.error();
+          if (*n == 0) return make_error("client.io", closed);
+        }
+        const std::size_t n = std::min(left, buffer_.size());
+        if (auto ok = take(n); !ok) return ok.error();
+        left -= n;
+      }
+      return {};
+    };
     const bool chunked = r.header("transfer-encoding") && lower(*r.header("transfer-encoding")).find("chunked") != std::string::npos;
     const bool no_body = head_request || r.status == 204 || r.status == 304;
     if (no_body) {
@@ -173,31 +200,27 @@ Result<ClientResponse> Client::read_response(bool head_request) {
         }
         const std::size_t size = std::strtoull(buffer_.c_str(), nullptr, 16);
         buffer_.erase(0, eol + 2);
-        while (buffer_.size() < size + 2) {
+        if (auto ok = take_exactly(size, "connection closed inside a chunk"); !ok) return ok.error();
+        while (buffer_.size() < 2) {
           auto n = fill(deadline, start);
           if (!n) return n.error();
           if (*n == 0) return make_error("client.io", "connection closed inside a chunk");
         }
-        r.body.append(buffer_, 0, size);
-        buffer_.erase(0, size + 2);
+        buffer_.erase(0, 2);
         if (size == 0) break;  // (trailers are not used by hdrd)
       }
     } else if (const auto* cl = r.header("content-length")) {
-      const std::size_t want = std::strtoull(cl->c_str(), nullptr, 10);
-      while (buffer_.size() < want) {
-        auto n = fill(deadline, start);
-        if (!n) return n.error();
-        if (*n == 0) return make_error("client.io", "connection closed before the whole body arrived");
-      }
-      r.body = buffer_.substr(0, want);
-      buffer_.erase(0, want);
+      if (!stream) r.body.reserve(std::strtoull(cl->c_str(), nullptr, 10));
+      if (auto ok = take_exactly(std::strtoull(cl->c_str(), nullptr, 10), "connection closed before the whole body arrived");
+          !ok)
+        return ok.error();
     } else {
       for (;;) {
+        if (auto ok = take(buffer_.size()); !ok) return ok.error();
         auto n = fill(deadline, start);
         if (!n) return n.error();
         if (*n == 0) break;
       }
-      r.body.swap(buffer_);
       close();
     }
     if (const auto* c = r.header("connection"); c && lower(*c).find("close") != std::string::npos) close();
@@ -207,6 +230,16 @@ Result<ClientResponse> Client::read_response(bool head_request) {
 
 Result<ClientResponse> Client::request(const std::string& method, const std::string& target, const std::string& body,
                                        const std::vector<std::pair<std::string, std::string>>& headers) {
+  return exchange(method, target, body, headers, nullptr);
+}
+
+Result<ClientResponse> Client::download(const std::string& target, const BodySink& sink) {
+  return exchange("GET", target, {}, {}, &sink);
+}
+
+Result<ClientResponse> Client::exchange(const std::string& method, const std::string& target, const std::string& body,
+                                        const std::vector<std::pair<std::string, std::string>>& headers,
+                                        const BodySink* sink) {
   for (int attempt = 0; attempt < 2; ++attempt) {
     const bool reused = fd_ >= 0;
     if (!reused)
@@ -219,10 +252,15 @@ Result<ClientResponse> Client::request(const std::string& method, const std::str
     req += body;
     auto sent = send_all(req);
     if (sent) {
-      auto r = read_response(method == "HEAD");
+      bool delivered = false;
+      auto r = read_response(method == "HEAD", sink, delivered);
       if (r) return r;
-      // A kept-alive connection the server had already closed: retry once on a new one.
-      if (!reused || r.error().code != "client.io") return r.error();
+      // A kept-alive connection the server had already closed: retry once on a new one,
+      // unless part of the body already went to the sink.
+      if (!reused || delivered || r.error().code != "client.io") {
+        close();
+        return r.error();
+      }
     } else if (!reused) {
       return sent.error();
     }

@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "encode/result.hpp"
@@ -49,12 +50,20 @@ class Client {
   // client.connect, client.io, client.timeout, client.protocol.
   Result<ClientResponse> request(const std::string& method, const std::string& target, const std::string& body = {},
                                  const std::vector<std::pair<std::string, std::string>>& headers = {});
+  // Like request() without a body, but a 2xx answer's body goes to `sink` piece by piece
+  // as it arrives (the response's `body` stays empty), so a large result (a video) is never
+  // held in memory. Other statuses keep their body (a JSON error) in the response. A sink
+  // error ends the request with it; a connection lost after the first piece is not retried.
+  using BodySink = std::function<Result<void>(std::string_view piece)>;
+  Result<ClientResponse> download(const std::string& target, const BodySink& sink);
   void close();
 
  private:
   Result<void> connect();
   Result<void> send_all(const std::string& data);
-  Result<ClientResponse> read_response(bool head_request);
+  Result<ClientResponse> exchange(const std::string& method, const std::string& target, const std::string& body,
+                                  const std::vector<std::pair<std::string, std::string>>& headers, const BodySink* sink);
+  Result<ClientResponse> read_response(bool head_request, const BodySink* sink, bool& delivered);
   Result<std::size_t> fill(std::chrono::steady_clock::time_point deadline, std::chrono::steady_clock::time_point start);
 
   ClientOptions options_;

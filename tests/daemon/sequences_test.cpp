@@ -20,6 +20,7 @@
 
 #include "encode/io/io.hpp"
 #include "tests/daemon/daemon_harness.hpp"
+#include "tests/testing/ffprobe.hpp"
 
 namespace hdrd::testing {
 namespace {
@@ -58,7 +59,6 @@ Image exr_frame(int i) {
   return img;
 }
 
-bool have_ffprobe() { return run_command("ffprobe -version").exit_code == 0; }
 
 class SequencesTest : public ::testing::Test {
  protected:
@@ -127,6 +127,16 @@ class SequencesTest : public ::testing::Test {
     const fs::path on_disk = job["files"].value("video", "");
     EXPECT_EQ(std::stoull(*r.header("content-length")), fs::file_size(on_disk));
     EXPECT_EQ(r.body, read_file(on_disk));
+    // The client's streaming download (hdrctl -o): the same bytes, none kept in the response.
+    std::string streamed;
+    auto d = c.download("/v1/jobs/" + job.value("id", "") + "/result", [&](std::string_view piece) -> Result<void> {
+      streamed.append(piece);
+      return {};
+    });
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    EXPECT_EQ(d->status, 200);
+    EXPECT_TRUE(d->body.empty());
+    EXPECT_EQ(streamed, read_file(on_disk));
     if (!have_ffprobe()) GTEST_SKIP() << "ffprobe not installed: the video's stream properties are not checked";
     TempDir tmp;
     std::ofstream(tmp / "v.mp4", std::ios::binary) << r.body;
@@ -373,6 +383,16 @@ TEST_F(SequencesTest, UnknownJobsAndMethods) {
     EXPECT_EQ(error_code(r), "job.not_found");
   }
   EXPECT_EQ(call(c, "GET", "/v1/jobs/ffffffffffffffff/result").status, 404);
+  // A download's error keeps its JSON body in the response; nothing reaches the sink.
+  bool sunk = false;
+  auto d = c.download("/v1/jobs/ffffffffffffffff/result", [&](std::string_view) -> Result<void> {
+    sunk = true;
+    return {};
+  });
+  ASSERT_TRUE(d.ok()) << d.error().message;
+  EXPECT_EQ(d->status, 404);
+  EXPECT_EQ(d->error().code, "job.not_found") << d->body;
+  EXPECT_FALSE(sunk);
   EXPECT_EQ(call(c, "GET", "/v1/jobs/ffffffffffffffff/other").status, 404);
   auto m = call(c, "POST", "/v1/jobs/abc");
   EXPECT_EQ(m.status, 405);

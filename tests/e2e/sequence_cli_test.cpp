@@ -15,10 +15,12 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/io/io.hpp"
+#include "tests/testing/ffprobe.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace fs = std::filesystem;
 using hdrd::testing::run_command;
+using hdrd::testing::side_data;
 using hdrd::testing::TempDir;
 using nlohmann::json;
 
@@ -27,7 +29,7 @@ namespace {
 constexpr int kW = 64, kH = 32;
 
 std::string hdrd() { return hdrd::testing::hdrd_binary().string(); }
-bool have(const char* tool) { return run_command(fmt::format("{} -version", tool)).exit_code == 0; }
+bool have(const char* tool) { return hdrd::testing::have_tool(tool); }
 
 // Shots of a moving gradient (a different picture each frame), relative Rec.709.
 void write_shots(const fs::path& dir, int n, double gain = 1.0) {
@@ -46,16 +48,9 @@ void write_shots(const fs::path& dir, int n, double gain = 1.0) {
 }
 
 json ffprobe(const fs::path& file) {
-  const auto r = run_command("ffprobe -v error -show_streams -show_frames -of json '" + file.string() + "'");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  return r.exit_code == 0 ? json::parse(r.out) : json::object();
-}
-
-const json* side_data(const json& frame, const std::string& type) {
-  if (!frame.contains("side_data_list")) return nullptr;
-  for (const auto& s : frame["side_data_list"])
-    if (s.value("side_data_type", "") == type) return &s;
-  return nullptr;
+  auto j = hdrd::testing::ffprobe(file);
+  EXPECT_TRUE(j) << "ffprobe failed on " << file;
+  return j ? *j : json::object();
 }
 
 std::vector<std::uint8_t> slurp(const fs::path& p) {

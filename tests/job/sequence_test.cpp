@@ -15,6 +15,7 @@
 #include "encode/io/io.hpp"
 #include "job/frame_job.hpp"
 #include "job/sequence.hpp"
+#include "tests/encode/io/png_util.hpp"
 #include "tests/testing/standards.hpp"
 #include "tests/testing/testing.hpp"
 
@@ -270,6 +271,37 @@ TEST(Sequence, ContentLightRecomputedFromTheDecodedFrames) {
   EXPECT_TRUE(fs::exists(d / "out.dovi.json"));
   EXPECT_EQ(read_json(d / "out.json")["frames"].size(), 3u);
   EXPECT_EQ(read_json(d / "out.00001.json")["format"], "hdrd-dump");
+}
+
+// A sequence loads its UI overlay and its grade once, with the first frame: the files can
+// go after it (each frame is still its single-frame encode with both applied).
+TEST(Sequence, UiAndGradeAreLoadedOncePerSequence) {
+  testing::TempDir d;
+  for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0 + i);
+  const fs::path lut = d / "warm.cube", ui = d / "ui.png";
+  std::ofstream(lut) << "LUT_3D_SIZE 2\n0 0 0\n1 0 0\n0 0.9 0\n1 0.9 0\n0 0 0.8\n1 0 0.8\n0 0.9 0.8\n1 0.9 0.8\n";
+  io::pngtest::Spec spec;
+  spec.width = 2, spec.height = 2, spec.color_type = 6;
+  const auto png = io::pngtest::encode(spec, {255, 255, 255, 255, 128, 128, 128, 64, 128, 128, 128, 64, 0, 0, 0, 0});
+  std::ofstream(ui, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  const json body = {{"images", (d / "s.%d.exr").string()},
+                     {"exposure", {{"mode", "manual"}}},
+                     {"grade", {{"lut", lut.string()}}},
+                     {"ui", {{"path", ui.string()}, {"x", 3}, {"y", 2}, {"scale", 2}}},
+                     {"formats", {"raw"}}};
+  std::vector<std::vector<std::uint8_t>> want;
+  for (int i = 0; i < 3; ++i) want.push_back(single_frame_raw(body, d / fmt::format("s.{}.exr", i)));
+  SequenceOptions o;
+  o.progress = [&](const SequenceProgress&) {
+    fs::remove(lut);
+    fs::remove(ui);
+  };
+  auto r = run(body, d / "out", o);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_FALSE(fs::exists(lut));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(read_bytes(d / fmt::format("out.{:05d}.raw", i)), want[i]) << "frame " << i;
+  EXPECT_NE(want[0], single_frame_raw({{"images", "x"}, {"exposure", {{"mode", "manual"}}}}, d / "s.0.exr"))
+      << "the grade and the UI change the frame";
 }
 
 TEST(Sequence, AnErrorLeavesNothingBehind) {

@@ -99,33 +99,64 @@ void print(const std::string& s) {
   if (s.empty() || s.back() != '\n') std::fputc('\n', stdout);
 }
 
-// A regular file is replaced atomically (no reader sees half a frame); a device or FIFO
+// A regular file is replaced atomically (no reader sees half a frame): written to a
+// temporary beside it, renamed by commit(), removed if never committed. A device or FIFO
 // (-o /dev/null, a pipe) is written directly.
-void write_atomically(const std::string& path, const std::string& data) {
-  const fs::path p(path);
-  std::error_code ec;
-  if (fs::exists(p, ec) && !fs::is_regular_file(p, ec)) {
-    std::ofstream out(p, std::ios::binary);
-    if (!out.write(data.data(), std::streamsize(data.size())).flush()) throw Failure{1, "cannot write " + path};
-    return;
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::string path) : path_(std::move(path)) {
+    std::error_code ec;
+    const fs::path p(path_);
+    direct_ = fs::exists(p, ec) && !fs::is_regular_file(p, ec);
+    if (!direct_) {
+      tmp_ = p;
+      tmp_ += fmt::format(".tmp-{}", ::getpid());
+    }
+    out_.open(direct_ ? p : tmp_, std::ios::binary | std::ios::trunc);
+    if (!out_) fail("cannot write " + path_);
   }
-  fs::path tmp = p;
-  tmp += fmt::format(".tmp-{}", ::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(data.data(), std::streamsize(data.size()));
-    if (!out.flush()) {
+  ~AtomicFile() {
+    if (!committed_ && !direct_) {
       std::error_code ec;
-      fs::remove(tmp, ec);
-      throw Failure{1, "cannot write " + path};
+      out_.close();
+      fs::remove(tmp_, ec);
     }
   }
-  fs::rename(tmp, p, ec);
-  if (ec) {
-    const std::string why = ec.message();
-    fs::remove(tmp, ec);
-    throw Failure{1, "cannot write " + path + ": " + why};
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  void write(std::string_view data) {
+    if (!out_.write(data.data(), std::streamsize(data.size()))) fail("cannot write " + path_);
+    bytes_ += data.size();
   }
+  void commit() {
+    if (!out_.flush()) fail("cannot write " + path_);
+    out_.close();
+    committed_ = true;
+    if (direct_) return;
+    std::error_code ec;
+    fs::rename(tmp_, path_, ec);
+    if (ec) {
+      const std::string why = ec.message();
+      fs::remove(tmp_, ec);
+      throw Failure{1, "cannot write " + path_ + ": " + why};
+    }
+  }
+  std::uint64_t bytes() const { return bytes_; }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) { throw Failure{1, why}; }
+  std::string path_;
+  fs::path tmp_;
+  std::ofstream out_;
+  bool direct_ = false, committed_ = false;
+  std::uint64_t bytes_ = 0;
+};
+
+void write_atomically(const std::string& path, const std::string& data) {
+  AtomicFile f(path);
+  f.write(data);
+  f.commit();
 }
 
 // The X-Hdrd-* headers as a JSON object (keys without the prefix).
@@ -348,12 +379,24 @@ json follow_job(const Global& g, const std::string& id, double poll_s) {
   }
 }
 
+// Streams the result into the file as it arrives (a video is never held in memory).
 void download_result(const Global& g, const std::string& id, const std::string& output) {
-  const auto r = call(g, "GET", "/v1/jobs/" + id + "/result");
-  write_atomically(output, r.body);
+  Client client = make_client(g);
+  AtomicFile file(output);
+  auto r = client.download("/v1/jobs/" + id + "/result", [&](std::string_view piece) -> hdrd::Result<void> {
+    file.write(piece);
+    return {};
+  });
+  if (!r) throw Failure{3, r.error().message};
+  if (r->status >= 400) {
+    const auto e = r->error();
+    throw Failure{1, fmt::format("{} ({}){}", e.message, e.code, e.field.empty() ? "" : ", field " + e.field)};
+  }
+  file.commit();
   if (!g.quiet)
-    std::fprintf(stderr, "hdrctl: wrote %s (%s, %zu bytes)\n", output.c_str(),
-                 r.header("content-type") ? r.header("content-type")->c_str() : "?", r.body.size());
+    std::fprintf(stderr, "hdrctl: wrote %s (%s, %llu bytes)\n", output.c_str(),
+                 r->header("content-type") ? r->header("content-type")->c_str() : "?",
+                 static_cast<unsigned long long>(file.bytes()));
 }
 
 // A final job: its JSON (--json) or a summary; failed and cancelled jobs exit 1.

@@ -29,6 +29,7 @@ extern "C" {
 #include "encode/video/writer.hpp"
 #include "encode/video/ycbcr.hpp"
 #include "tests/encode/video/video_testing.hpp"
+#include "tests/testing/ffprobe.hpp"
 #include "tests/testing/testing.hpp"
 
 using namespace hdrd;
@@ -153,12 +154,9 @@ std::vector<DecodedFrame> decode(const fs::path& file) {
   return out;
 }
 
-std::optional<nlohmann::json> ffprobe(const fs::path& file) {
-  const auto r = hdrd::testing::run_command("ffprobe -v error -show_streams -show_frames -of json '" + file.string() + "'");
-  if (r.exit_code != 0) return std::nullopt;
-  return nlohmann::json::parse(r.out);
-}
-bool have_ffprobe() { return hdrd::testing::run_command("ffprobe -version").exit_code == 0; }
+using hdrd::testing::ffprobe;
+using hdrd::testing::have_ffprobe;
+using hdrd::testing::side_data;
 
 // ITU-T T.35 messages of an AV1 stream (country code on), as FFmpeg's AV1 syntax parser
 // (the trace_headers bitstream filter) reads them, in decode order.
@@ -176,12 +174,6 @@ std::vector<std::vector<std::uint8_t>> t35_payloads_of(const fs::path& file) {
   return out;
 }
 
-const nlohmann::json* side_data(const nlohmann::json& entry, const std::string& type) {
-  if (!entry.contains("side_data_list")) return nullptr;
-  for (const auto& s : entry["side_data_list"])
-    if (s.value("side_data_type", "") == type) return &s;
-  return nullptr;
-}
 
 // Our own conversion of the input, the reference the decoded pictures are compared with.
 struct Reference {
