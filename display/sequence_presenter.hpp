@@ -43,7 +43,7 @@ struct SequenceOptions {
   PresentOptions present;        // connector, scRGB policy, require_hdr_properties (test_only unused)
   double fps = 0;                // frames per second; 0 = the mode's refresh rate (one frame per vblank)
   int buffers = 2;               // 2 (double) or 3 (triple buffering: the next frame is copied while a flip is pending)
-  Pacing pacing = Pacing::realtime;
+  Pacing pacing = Pacing::realtime;  // hdrd's front ends pass the present.pacing setting (its default: every-frame)
   // The sequence's static metadata (CTA-861.3): MaxCLL / MaxFALL of the whole sequence
   // and the mastering display. Unset: MaxCLL/MaxFALL "unknown" (carried as the mastering
   // peak, encode/frame.hpp carried_light_level), never one frame's values, which would

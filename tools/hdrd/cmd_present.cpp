@@ -18,6 +18,7 @@
 #include "display/dump_reader.hpp"
 #include "display/dump_sequence.hpp"
 #include "display/presenter.hpp"
+#include "job/settings.hpp"
 #include "tools/hdrd/command.hpp"
 
 namespace hdrd::cli {
@@ -34,8 +35,12 @@ struct PresentCliOptions {
   double seconds = 10;
   bool test_only = false;
   double fps = 0;
-  std::string pacing = "realtime";
-  int buffers = 2;
+  // The present.* settings of live output (hdrd render --present): one name, default and
+  // description for both (job/settings.cpp).
+  std::string pacing = setting("present.pacing").default_value().get<std::string>();
+  int buffers = setting("present.buffers").default_value().get<int>();
+
+  static const job::Setting& setting(std::string_view path) { return *job::find_setting(path); }
 };
 
 nlohmann::json result_json(const PresentResult& r) {
@@ -169,7 +174,9 @@ void run_sequence(const PresentCliOptions& o) {
   if (o.fps < 0 || o.fps > 1000) throw CliError("--fps must be between 0 (the mode's refresh rate) and 1000");
   const auto pacing = parse_pacing(o.pacing);
   if (!pacing) throw CliError("--pacing: '" + o.pacing + "' is not realtime or every-frame");
-  if (o.buffers != 2 && o.buffers != 3) throw CliError("--buffers must be 2 or 3");
+  const auto& buffers = PresentCliOptions::setting("present.buffers");
+  if (o.buffers < buffers.min || o.buffers > buffers.max)
+    throw CliError(fmt::format("--buffers must be between {} and {}", buffers.min, buffers.max));
   auto seq = open_dump_sequence(o.inputs);
   if (!seq) throw HdrdError(seq.error());
   if (o.test_only) return run_still(o, seq->sidecars.front().string());  // the configuration of the first frame
@@ -242,10 +249,9 @@ void setup(CLI::App& root) {
   app->add_option("--connector", o->connector, "Connector name, e.g. HDMI-A-1 (default: the first connected)");
   app->add_option("--seconds", o->seconds, "How long to keep a single frame on screen")->capture_default_str();
   app->add_option("--fps", o->fps, "Sequence frame rate (default: the sequence sidecar's, else the mode's refresh rate)");
-  app->add_option("--pacing", o->pacing,
-                  "realtime (drop frames that are too late, keep the clock) or every-frame (never drop)")
+  app->add_option("--pacing", o->pacing, std::string(PresentCliOptions::setting("present.pacing").doc))
       ->capture_default_str();
-  app->add_option("--buffers", o->buffers, "Scan-out buffers for a sequence: 2 (double) or 3 (triple)")
+  app->add_option("--buffers", o->buffers, std::string(PresentCliOptions::setting("present.buffers").doc))
       ->capture_default_str();
   app->add_option("--scrgb", o->scrgb, "scRGB frames: convert (to HDR10), refuse, or passthrough (raw FP16)")
       ->capture_default_str();
