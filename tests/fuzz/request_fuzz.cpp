@@ -1,7 +1,8 @@
 // Fuzz target for the request parser (job/request.hpp) in all its spellings: JSON bodies of
 // POST /v1/render, /v1/encode, /v1/pattern; query strings; CLI flag lists; Accept headers,
 // base64 and paths inside an asset root (daemon/accept.hpp, daemon/paths.hpp). The first
-// byte picks what the rest is fed to. Links only hdrd_daemon_request (and the pure request
+// byte picks what the rest is fed to, the source, and whether it is a sequence request
+// (POST /v1/sequences takes the sequence settings). Links only hdrd_daemon_request (and the pure request
 // library under it).
 //
 // Invariants checked beyond "no crash": an accepted request is within the limits, its
@@ -78,7 +79,7 @@ void check_request(const Result<FrameRequest>& r, const ParseContext& ctx) {
     check(resolve_target(mode, {}, request_levels(*r)).ok());
   }
   for (const auto& s : settings())
-    if (s.type == Type::path && s.takes(r->source) && !r->is_null(s.path))
+    if (s.type == Type::path && s.takes(r->source) && (r->sequence || !s.sequence) && !r->is_null(s.path))
       check(daemon::is_within(fs::canonical(asset_root()), r->text(s.path)));
   (void)r->canonical().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   std::string accept = "image/png, image/x-exr;q=0.5";
@@ -112,6 +113,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   };
   const Source sources[] = {Source::render, Source::encode, Source::pattern};
   ctx.source = sources[(data[0] >> 3) % 3];
+  ctx.sequence = (data[0] >> 3) / 3 % 2 == 1;  // POST /v1/sequences: the sequence settings too
   switch (data[0] % 8) {
     case 0:
     case 1:
