@@ -4,10 +4,11 @@
 # different picture every frame, as a camera pan), and measures:
 #   split     per-frame time of `hdrd encode 'pan.%03d.exr' --video hevc` by stage, from the
 #             sequence sidecar's timings_ms: read, meter+encode, Y'CbCr conversion, metadata,
-#             the video encoder's calls, the mux; and the process CPU (user + sys)
-#   own       the same command without video (--format raw into a scratch dir): hdrd's own
-#             work; the video encoder's CPU is the difference. Target: hdrd's own per-frame
-#             work outside rendering and the encoder (meter + encode + Y'CbCr + metadata)
+#             the video encoder's calls, the mux (wall), the CPU of hdrd's own stages
+#             (*_cpu: CpuMeter, which leaves out the encoder's threads), and the process CPU
+#   own       the same command without video (--format raw into a scratch dir); the video
+#             encoder's CPU is the difference. Target: hdrd's own per-frame work outside
+#             rendering and the encoder (meter + encode + Y'CbCr + metadata, CPU)
 #             <= 10 % of the encoder's CPU at its default preset
 #   render    `hdrd render --scene hdr --frames N --video hevc` at 1080p: render per frame
 #   rss       resident memory of `hdrd encode` over 300 frames (640x360, --video hevc),
@@ -65,15 +66,18 @@ for size in sizes:
             for f in os.listdir(scratch):
                 os.remove(os.path.join(scratch, f))
     per = lambda case, key: med([r[2]["timings_ms"].get(key, 0.0) / frames for r in runs[case]])
-    split = {k: per("video", k) for k in ["read", "encode", "video_ycbcr", "metadata", "video_encoder", "video_mux", "video"]}
+    split = {k: per("video", k) for k in ["read", "encode", "encode_cpu", "video_ycbcr", "video_ycbcr_cpu", "metadata",
+                                          "metadata_cpu", "video_encoder", "video_mux", "video"]}
     cpu_video = med([r[1] / frames * 1e3 for r in runs["video"]])
     cpu_own = med([r[1] / frames * 1e3 for r in runs["own"]])
-    encoder_cpu = cpu_video - cpu_own - split["video_ycbcr"] - split["metadata"]
-    # hdrd's own work outside reading and the encoder, in CPU ms: meter + tone map + encode
-    # (its CPU in the run without video, where nothing runs beside it), Y'CbCr and the metadata
-    # (one thread each: their wall time, an upper bound on a loaded machine).
-    own_work = per("own", "encode_cpu") + split["video_ycbcr"] + split["metadata"]
-    split["encode_cpu_without_video"] = per("own", "encode_cpu")
+    # The encoder's CPU: what the video adds to the process (which also pays for the raw
+    # dumps of the run without video: the encoder comes out a little low, the ratio high).
+    encoder_cpu = cpu_video - cpu_own - split["video_ycbcr_cpu"] - split["metadata_cpu"]
+    # hdrd's own work outside reading and the encoder, in CPU ms of the video run itself:
+    # meter + temporal decisions + tone map + encode, Y'CbCr, the metadata. Each is a
+    # CpuMeter (its thread and the pool's tasks for it), so the encoder's threads running
+    # beside them do not count.
+    own_work = split["encode_cpu"] + split["video_ycbcr_cpu"] + split["metadata_cpu"]
     split["read_cpu_without_video"] = per("own", "read_cpu")
     result["sizes"][size] = {
         "frames": frames,

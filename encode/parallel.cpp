@@ -8,6 +8,8 @@
 #include <thread>
 #include <vector>
 
+#include <time.h>
+
 namespace hdrd {
 namespace {
 
@@ -16,6 +18,7 @@ namespace {
 // will touch the batch again (it lives on the caller's stack).
 struct Batch {
   const std::function<void(int)>* task = nullptr;
+  CpuMeter* meter = nullptr;  // the caller's: workers add their task time to it
   int count = 0;
   std::atomic<int> next{0};
   int done = 0;
@@ -23,6 +26,13 @@ struct Batch {
 };
 
 thread_local bool t_in_pool_task = false;
+thread_local CpuMeter* t_meter = nullptr;
+
+std::int64_t thread_cpu_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return std::int64_t(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
 
 class Pool {
  public:
@@ -45,13 +55,14 @@ class Pool {
     }
     Batch b;
     b.task = &task;
+    b.meter = t_meter;
     b.count = tasks;
     {
       std::lock_guard lock(m_);
       queue_.push_back(&b);
     }
     work_cv_.notify_all();
-    drain(b);
+    drain(b, true);
     std::unique_lock lock(m_);
     done_cv_.wait(lock, [&] { return b.done == b.count && b.users == 0; });
   }
@@ -67,18 +78,22 @@ class Pool {
         b = queue_.front();
         ++b->users;
       }
-      drain(*b);
+      drain(*b, false);
       std::lock_guard lock(m_);
       if (--b->users == 0) done_cv_.notify_all();
     }
   }
 
   // Runs the batch's tasks until none is left to take; then the batch leaves the queue.
-  void drain(Batch& b) {
+  // A worker (not the caller, whose own clock its meter reads) adds its task time to the
+  // caller's meter.
+  void drain(Batch& b, bool caller) {
     const bool was_in_task = t_in_pool_task;
     t_in_pool_task = true;
     for (int i = b.next.fetch_add(1); i < b.count; i = b.next.fetch_add(1)) {
+      const std::int64_t t0 = !caller && b.meter ? thread_cpu_ns() : 0;
       (*b.task)(i);
+      if (!caller && b.meter) b.meter->add_worker_ns(thread_cpu_ns() - t0);
       std::lock_guard lock(m_);
       if (++b.done == b.count) done_cv_.notify_all();
     }
@@ -103,6 +118,14 @@ Pool& pool() {
 }  // namespace
 
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
+CpuMeter::CpuMeter() : previous_(t_meter), start_ns_(thread_cpu_ns()) { t_meter = this; }
+CpuMeter::~CpuMeter() { t_meter = previous_; }
+double CpuMeter::ms() const { return double(thread_cpu_ns() - start_ns_ + workers_ns_.load()) / 1e6; }
+CpuMeter* CpuMeter::current() { return t_meter; }
+void CpuMeter::add_worker_ns(std::int64_t ns) {
+  for (CpuMeter* m = this; m; m = m->previous_) m->workers_ns_ += ns;
+}
 
 void parallel_run(int tasks, const std::function<void(int)>& task) { pool().run(tasks, task); }
 

@@ -5,7 +5,9 @@
 // the calling thread is always one of the runners.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 
 namespace hdrd {
@@ -24,5 +26,27 @@ void parallel_run(int tasks, const std::function<void(int)>& task);
 // own cache lines.
 void parallel_for(std::size_t count, int threads, std::size_t min_chunk,
                   const std::function<void(std::size_t, std::size_t)>& fn);
+
+// The CPU time of one piece of work that may fan out over the pool: the calling thread's
+// own time while the meter lives, plus what pool workers spend on the tasks of the
+// parallel_run calls made (directly or nested) from that thread meanwhile. Unlike the
+// process's CPU clock it leaves out the process's other threads (a sequence's writer, a
+// video encoder, another request's job). Meters nest: an outer one counts the inner ones'.
+class CpuMeter {
+ public:
+  CpuMeter();
+  ~CpuMeter();
+  CpuMeter(const CpuMeter&) = delete;
+  CpuMeter& operator=(const CpuMeter&) = delete;
+
+  double ms() const;                       // so far
+  void add_worker_ns(std::int64_t ns);     // to this meter and the ones it is nested in
+  static CpuMeter* current();              // this thread's innermost meter, or null
+
+ private:
+  CpuMeter* previous_;
+  std::int64_t start_ns_;
+  std::atomic<std::int64_t> workers_ns_{0};
+};
 
 }  // namespace hdrd

@@ -17,6 +17,7 @@
 #include "display/sequence_presenter.hpp"
 #include "encode/io/file_sequence.hpp"
 #include "encode/io/io.hpp"
+#include "encode/parallel.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/tone/temporal.hpp"
 #include "encode/video/sequence_metadata.hpp"
@@ -261,6 +262,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
   nlohmann::json timings = sum.timings;
   if (video) {
     timings["video_ycbcr"] = video->convert_ms;
+    timings["video_ycbcr_cpu"] = video->convert_cpu_ms;
     timings["video_encoder"] = video->encoder_ms;
     timings["video_mux"] = video->mux_ms;
     nlohmann::json vj = video->to_json();
@@ -350,12 +352,14 @@ class SequenceSink {
     add_time("dumps", t0);
     const bool start = item.decision.scene_start;
     const auto t1 = Clock::now();
+    const CpuMeter metadata_cpu;
     const FrameLight light = metadata_->light_of(f);
     if (options_.shard)  // the merge adds the shards' lights to the sequence's metadata
       lights_.push_back(light_json(light));
     else if (auto ok = metadata_->add(light, start); !ok)
       return ok.error();
     add_time("metadata", t1);
+    sum_.timings["metadata_cpu"] = sum_.timings.value("metadata_cpu", 0.0) + metadata_cpu.ms();
     if (writer_) {
       const auto t2 = Clock::now();
       if (auto ok = writer_->write(f, {.keyframe = start}); !ok) return ok.error();

@@ -22,6 +22,7 @@ extern "C" {
 
 #include "encode/io/io.hpp"
 #include "encode/io/signal_metadata.hpp"
+#include "encode/parallel.hpp"
 #include "encode/video/bitstream.hpp"
 #include "encode/video/encoder_config.hpp"
 #include "encode/video/ycbcr.hpp"
@@ -152,6 +153,7 @@ struct SequenceWriter::Impl {
   int frames = 0;
   ContentLightLevel frames_light;  // from EncodedFrame::content_light, when no metadata is given
   double convert_ms = 0, encoder_ms = 0, mux_ms = 0;  // wall time in each stage (VideoResult)
+  double convert_cpu_ms = 0;
   bool failed = false, done = false;
   bool opened = false, flushed = false;  // the encoder's state, for close_encoder()
 
@@ -219,7 +221,11 @@ struct SequenceWriter::Impl {
     const Planes420 planes{{frame->data[0], frame->linesize[0]}, {frame->data[1], frame->linesize[1]},
                            {frame->data[2], frame->linesize[2]}};
     const auto t0 = std::chrono::steady_clock::now();
-    if (auto ok = rgb_to_ycbcr420(f, ycbcr, planes); !ok) return ok;
+    {
+      const CpuMeter cpu;
+      if (auto ok = rgb_to_ycbcr420(f, ycbcr, planes); !ok) return ok;
+      convert_cpu_ms += cpu.ms();
+    }
     const auto t1 = std::chrono::steady_clock::now();
     convert_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
     frame->pts = frames;
@@ -554,6 +560,7 @@ VideoResult SequenceWriter::Impl::result(const SequenceMetadata* meta, const io:
   VideoResult v;
   v.path = output;
   v.convert_ms = convert_ms;
+  v.convert_cpu_ms = convert_cpu_ms;
   v.encoder_ms = encoder_ms;
   v.mux_ms = mux_ms;
   v.codec = std::string(to_string(settings.codec));

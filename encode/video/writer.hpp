@@ -93,6 +93,7 @@ struct VideoResult {
   // Wall time in hdrd's R'G'B' -> Y'CbCr conversion, in the encoder's calls (its own
   // threads run beside them) and in the final mux; not in to_json (the bytes' description).
   double convert_ms = 0, encoder_ms = 0, mux_ms = 0;
+  double convert_cpu_ms = 0;  // the R'G'B' -> Y'CbCr conversion's CPU (CpuMeter: its thread and pool tasks)
   nlohmann::json to_json() const;
 };
 

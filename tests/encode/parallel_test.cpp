@@ -2,6 +2,8 @@
 // and calls from inside a task complete (no deadlock), parallel_for covers its range.
 #include <gtest/gtest.h>
 
+#include <time.h>
+
 #include <atomic>
 #include <thread>
 #include <vector>
@@ -42,6 +44,48 @@ TEST(Parallel, ForCoversTheRangeInAlignedParts) {
     for (std::size_t i = 0; i < count; ++i) ASSERT_EQ(hit[i].load(), 1) << count << " items, #" << i;
     EXPECT_EQ(misaligned.load(), 0);
   }
+}
+
+}  // namespace
+}  // namespace hdrd
+
+namespace hdrd {
+namespace {
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+// Burns `ms` of this thread's CPU (not wall time: a loaded machine does not change it).
+void spin(double ms) {
+  volatile double x = 0;
+  for (const double end = thread_cpu_ms() + ms; thread_cpu_ms() < end;)
+    for (int i = 0; i < 1000; ++i) x = x + 1;
+}
+
+// The meter counts its thread and the pool's tasks for it (nested calls included, outer
+// meters too), and not another thread of the process that works meanwhile.
+TEST(CpuMeter, CountsThePoolsTasksForItAndNothingElse) {
+  std::atomic<bool> stop{false};
+  std::thread other([&] {
+    while (!stop) spin(1);
+  });
+  const CpuMeter outer;
+  double inner_ms = 0;
+  {
+    const CpuMeter meter;
+    EXPECT_EQ(CpuMeter::current(), &meter);
+    parallel_run(4, [](int) { spin(15); });
+    inner_ms = meter.ms();
+  }
+  EXPECT_EQ(CpuMeter::current(), &outer);
+  stop = true;
+  other.join();
+  EXPECT_GE(inner_ms, 60.0);
+  EXPECT_LT(inner_ms, 60.0 + 15.0) << "the other thread's CPU must not count";
+  EXPECT_GE(outer.ms(), inner_ms);
+  EXPECT_LT(outer.ms(), inner_ms + 15.0);
 }
 
 }  // namespace
