@@ -19,7 +19,8 @@ constexpr std::uint64_t kFrameBpp = 8 + 6;        // encoded frame (up to 8 B/px
 constexpr std::uint64_t kRequestTextFactor = 3;   // body, its JSON document, a decoded base64 PNG
 constexpr std::uint64_t kPerJobBytes = 32u << 20; // shadow map (2048^2 x 4 B), LUTs, scratch, a first frame's JIT
 constexpr std::uint64_t kSceneFileFactor = 4;     // a scene or glTF file: parsed, meshes, their GPU copy
-constexpr std::uint64_t kVideoEncoderBpp = 96;   // estimate_sequence_memory: ~30 frames of 4:2:0 10-bit
+constexpr std::uint64_t kVideoEncoderFixedBytes = 192u << 20;  // estimate_sequence_memory (memory.hpp: measured)
+constexpr std::uint64_t kVideoEncoderBpp = 160;
 constexpr std::size_t kExrHeaderPrefixBytes = 4u << 20;  // where an EXR's header must end for the estimate
 constexpr int kMaxMsaaSamples = shading::kMaxSamples;  // what the renderer clamps a request to
 
@@ -142,7 +143,7 @@ Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const
     frame = *e;
     pixels = frame_pixels(r);
   }
-  const std::uint64_t video = r.is_null("video.codec") ? 0 : pixels * kVideoEncoderBpp;
+  const std::uint64_t video = r.is_null("video.codec") ? 0 : kVideoEncoderFixedBytes + pixels * kVideoEncoderBpp;
   return frame * (queue_depth + 2) + video;
 }
 

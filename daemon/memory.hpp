@@ -54,9 +54,10 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
 // A sequence (POST /v1/sequences): one frame's estimate (a render's; an encode's from its
 // first EXR's header and file size) for every frame its pipeline holds at once
 // (job/sequence.hpp: the frame being rendered/encoded, `queue_depth` queued, the one the
-// writer has), plus the video encoder's own frames when the request has a codec:
-// x265 medium keeps about 30 frames of 4:2:0 10-bit (rc-lookahead 20, frame threads, the
-// reference pictures) at 3 B/px, so 96 B/px (an allowance, not a measurement).
+// writer has), plus the video encoder's own memory when the request has a codec: 192 MiB
+// + 160 B/px, an envelope over what it was measured to add (maximum resident set of `hdrd
+// encode --video` less the same run with --format raw; x265 medium / SVT-AV1 defaults on
+// 2 cores): 640x360 +138 / +128 MB, 1080p +519 / +505 MB, 4K +1150 / +1279 MB.
 // Errors: the EXR's own, request.limit for the UI.
 Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
                                                std::size_t queue_depth, std::size_t body_bytes, const Limits& limits);
