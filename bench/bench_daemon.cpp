@@ -182,6 +182,16 @@ double header_ms(const hdrd::daemon::ClientResponse& r, const char* name) {
   return v ? std::stod(*v) : 0.0;
 }
 
+// The medians of the in-process and daemon times of the alternated pairs, and their
+// difference: the daemon's overhead.
+void overhead_counters(benchmark::State& state, const std::vector<double>& local_ms, const std::vector<double>& daemon_ms) {
+  const double l = median(local_ms), dm = median(daemon_ms);
+  state.counters["inprocess_ms"] = l;
+  state.counters["daemon_ms"] = dm;
+  state.counters["overhead_ms"] = dm - l;
+  state.counters["overhead_pct"] = l > 0 ? 100.0 * (dm - l) / l : 0;
+}
+
 // The comparison that matters on a shared machine: alternate one in-process frame and one
 // daemon round trip, so that background load hits both alike; report the medians and the
 // difference (the daemon's overhead). The daemon's own X-Hdrd-Render-Ms / X-Hdrd-Encode-Ms
@@ -220,11 +230,7 @@ void BM_Overhead_Interleaved(benchmark::State& state) {
     daemon_other.push_back(daemon_ms.back() - daemon_render.back() - daemon_encode.back());
     transport.push_back(daemon_other.back() - f->png_ms);
   }
-  const double l = median(local_ms), dm = median(daemon_ms);
-  state.counters["inprocess_ms"] = l;
-  state.counters["daemon_ms"] = dm;
-  state.counters["overhead_ms"] = dm - l;
-  state.counters["overhead_pct"] = l > 0 ? 100.0 * (dm - l) / l : 0;
+  overhead_counters(state, local_ms, daemon_ms);
   state.counters["inprocess_render_ms"] = median(local_render);
   state.counters["inprocess_encode_ms"] = median(local_encode);
   state.counters["inprocess_png_ms"] = median(local_png);
@@ -289,11 +295,7 @@ void BM_EncodeOverhead_Interleaved(benchmark::State& state) {
     daemon_ms.push_back(ms(t2 - t1));
     daemon_encode.push_back(header_ms(*d, "x-hdrd-encode-ms"));
   }
-  const double l = median(local_ms), dm = median(daemon_ms);
-  state.counters["inprocess_ms"] = l;
-  state.counters["daemon_ms"] = dm;
-  state.counters["overhead_ms"] = dm - l;
-  state.counters["overhead_pct"] = l > 0 ? 100.0 * (dm - l) / l : 0;
+  overhead_counters(state, local_ms, daemon_ms);
   state.counters["daemon_encode_ms"] = median(daemon_encode);
   state.counters["upload_mb"] = exr.size() / 1e6;
 }

@@ -210,7 +210,6 @@ Result<ClientResponse> Client::read_response(bool head_request, const BodySink* 
         if (size == 0) break;  // (trailers are not used by hdrd)
       }
     } else if (const auto* cl = r.header("content-length")) {
-      if (!stream) r.body.reserve(std::strtoull(cl->c_str(), nullptr, 10));
       if (auto ok = take_exactly(std::strtoull(cl->c_str(), nullptr, 10), "connection closed before the whole body arrived");
           !ok)
         return ok.error();

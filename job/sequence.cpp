@@ -359,7 +359,7 @@ class SequenceSink {
     else if (auto ok = metadata_->add(light, start); !ok)
       return ok.error();
     add_time("metadata", t1);
-    sum_.timings["metadata_cpu"] = sum_.timings.value("metadata_cpu", 0.0) + metadata_cpu.ms();
+    add_ms("metadata_cpu", metadata_cpu.ms());
     if (writer_) {
       const auto t2 = Clock::now();
       if (auto ok = writer_->write(f, {.keyframe = start}); !ok) return ok.error();
@@ -458,9 +458,8 @@ class SequenceSink {
   fs::path video_base() const {
     return options_.shard ? options_.shard->work_dir / fmt::format("shard-{}", options_.shard->shard) : outbase_;
   }
-  void add_time(const char* stage, Clock::time_point t0) {
-    sum_.timings[stage] = sum_.timings.value(stage, 0.0) + seconds_since(t0) * 1e3;
-  }
+  void add_ms(const char* stage, double ms) { sum_.timings[stage] = sum_.timings.value(stage, 0.0) + ms; }
+  void add_time(const char* stage, Clock::time_point t0) { add_ms(stage, seconds_since(t0) * 1e3); }
   void remove_written() {
     if (writer_) writer_->cancel();
     std::error_code ec;
