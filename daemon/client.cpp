@@ -2,7 +2,9 @@
 
 #include <netdb.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -95,38 +97,68 @@ Result<void> Client::connect() {
   return {};
 }
 
-Result<void> Client::send_all(const std::string& data) {
+// The request head and its body go out with one sendmsg() each time, without first being
+// joined into one string (a 4K upload would otherwise be copied once more before it leaves).
+Result<void> Client::send_all(std::string_view head, std::string_view body) {
+  const std::size_t total = head.size() + body.size();
   std::size_t off = 0;
-  while (off < data.size()) {
-    const ssize_t n = ::send(fd_, data.data() + off, data.size() - off, MSG_NOSIGNAL);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return make_error("client.io", std::string("send failed: ") + std::strerror(errno));
-    off += std::size_t(n);
+  while (off < total) {
+    iovec v[2];
+    std::size_t n = 0;
+    if (off < head.size()) {
+      v[n++] = {const_cast<char*>(head.data() + off), head.size() - off};
+      if (!body.empty()) v[n++] = {const_cast<char*>(body.data()), body.size()};
+    } else {
+      v[n++] = {const_cast<char*>(body.data() + (off - head.size())), total - off};
+    }
+    msghdr m{};
+    m.msg_iov = v;
+    m.msg_iovlen = n;
+    const ssize_t sent = ::sendmsg(fd_, &m, MSG_NOSIGNAL);
+    if (sent < 0 && errno == EINTR) continue;
+    if (sent <= 0) return make_error("client.io", std::string("send failed: ") + std::strerror(errno));
+    off += std::size_t(sent);
   }
   return {};
 }
 
-// Reads more bytes into buffer_; 0 means the server closed the connection.
-Result<std::size_t> Client::fill(Clock::time_point deadline, Clock::time_point start) {
-  char chunk[65536];
+// Reads up to `max` more bytes onto the end of `into` (buffer_, or a body being received
+// straight into its final string); 0 means the server closed the connection. It waits in
+// poll() only when nothing is there yet.
+Result<std::size_t> Client::receive(std::string& into, std::size_t max, Clock::time_point deadline,
+                                    Clock::time_point start) {
+  const std::size_t old = into.size();
   for (;;) {
-    const auto now = Clock::now();
-    if (now >= deadline) return make_error("client.timeout", "timed out waiting for the daemon");
-    const int wait_ms = int(std::min<long long>(
-        250, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1));
-    pollfd p{fd_, POLLIN, 0};
-    const int rc = ::poll(&p, 1, wait_ms);
-    if (rc < 0 && errno == EINTR) continue;
-    if (rc == 0) {
-      if (options_.on_wait) options_.on_wait(std::chrono::duration<double>(Clock::now() - start).count());
-      continue;
+    // Only what is there is made room for (resize() zero-fills what it adds).
+    int avail = 0;
+    if (::ioctl(fd_, FIONREAD, &avail) != 0) avail = 0;
+    const std::size_t want = std::min<std::size_t>(max, avail > 0 ? std::size_t(avail) : std::size_t(64) * 1024);
+    into.resize(old + want);
+    const ssize_t n = ::recv(fd_, into.data() + old, want, MSG_DONTWAIT);
+    into.resize(old + std::size_t(std::max<ssize_t>(n, 0)));
+    if (n >= 0) return std::size_t(n);
+    if (errno == EINTR) continue;
+    if (errno != EAGAIN && errno != EWOULDBLOCK)
+      return make_error("client.io", std::string("receive failed: ") + std::strerror(errno));
+    for (;;) {
+      const auto now = Clock::now();
+      if (now >= deadline) return make_error("client.timeout", "timed out waiting for the daemon");
+      const int wait_ms = int(std::min<long long>(
+          250, std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1));
+      pollfd p{fd_, POLLIN, 0};
+      const int rc = ::poll(&p, 1, wait_ms);
+      if (rc < 0 && errno == EINTR) continue;
+      if (rc == 0) {
+        if (options_.on_wait) options_.on_wait(std::chrono::duration<double>(Clock::now() - start).count());
+        continue;
+      }
+      break;
     }
-    const ssize_t n = ::recv(fd_, chunk, sizeof chunk, 0);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return make_error("client.io", std::string("receive failed: ") + std::strerror(errno));
-    buffer_.append(chunk, std::size_t(n));
-    return std::size_t(n);
   }
+}
+
+Result<std::size_t> Client::fill(Clock::time_point deadline, Clock::time_point start) {
+  return receive(buffer_, 256 * 1024, deadline, start);
 }
 
 Result<ClientResponse> Client::read_response(bool head_request, const BodySink* sink, bool& delivered) {
@@ -210,9 +242,26 @@ Result<ClientResponse> Client::read_response(bool head_request, const BodySink* 
         if (size == 0) break;  // (trailers are not used by hdrd)
       }
     } else if (const auto* cl = r.header("content-length")) {
-      if (auto ok = take_exactly(std::strtoull(cl->c_str(), nullptr, 10), "connection closed before the whole body arrived");
-          !ok)
-        return ok.error();
+      const std::size_t length = std::strtoull(cl->c_str(), nullptr, 10);
+      if (stream) {
+        if (auto ok = take_exactly(length, "connection closed before the whole body arrived"); !ok) return ok.error();
+      } else {
+        // Received straight into the body: one allocation of the announced length (up to
+        // 256 MiB: a bogus length costs address space, not memory, and longer bodies grow)
+        // and no copy through buffer_.
+        try {
+          r.body.reserve(std::min<std::size_t>(length, std::size_t(256) << 20));
+        } catch (const std::bad_alloc&) {
+        }
+        const std::size_t first = std::min(length, buffer_.size());
+        if (auto ok = take(first); !ok) return ok.error();
+        for (std::size_t left = length - first; left > 0;) {
+          auto n = receive(r.body, std::min<std::size_t>(left, std::size_t(4) << 20), deadline, start);
+          if (!n) return n.error();
+          if (*n == 0) return make_error("client.io", "connection closed before the whole body arrived");
+          left -= *n;
+        }
+      }
     } else {
       for (;;) {
         if (auto ok = take(buffer_.size()); !ok) return ok.error();
@@ -248,8 +297,7 @@ Result<ClientResponse> Client::exchange(const std::string& method, const std::st
     for (const auto& [k, v] : headers) req += k + ": " + v + "\r\n";
     if (!body.empty() || method == "POST" || method == "PUT") req += fmt::format("Content-Length: {}\r\n", body.size());
     req += "\r\n";
-    req += body;
-    auto sent = send_all(req);
+    auto sent = send_all(req, body);
     if (sent) {
       bool delivered = false;
       auto r = read_response(method == "HEAD", sink, delivered);

@@ -60,10 +60,12 @@ class Client {
 
  private:
   Result<void> connect();
-  Result<void> send_all(const std::string& data);
+  Result<void> send_all(std::string_view head, std::string_view body);
   Result<ClientResponse> exchange(const std::string& method, const std::string& target, const std::string& body,
                                   const std::vector<std::pair<std::string, std::string>>& headers, const BodySink* sink);
   Result<ClientResponse> read_response(bool head_request, const BodySink* sink, bool& delivered);
+  Result<std::size_t> receive(std::string& into, std::size_t max, std::chrono::steady_clock::time_point deadline,
+                              std::chrono::steady_clock::time_point start);
   Result<std::size_t> fill(std::chrono::steady_clock::time_point deadline, std::chrono::steady_clock::time_point start);
 
   ClientOptions options_;
