@@ -17,6 +17,9 @@ find_package(ZLIB REQUIRED)
 # with the sync flushes that let each thread compress its own segment of one zlib stream
 # (encode/io/zlib_stream.hpp; measured in docs/performance.md "Frame I/O").
 pkg_check_modules(ISAL REQUIRED IMPORTED_TARGET libisal)
+# xxHash's XXH3 digests uploads for the daemon's coalescing key (encode/io/digest.hpp): an
+# order of magnitude faster than a byte-wise hash, on the request's critical path.
+pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
 
 # Debian's OpenColorIOConfig.cmake computes a broken prefix: use pkg-config.
 pkg_check_modules(OCIO REQUIRED IMPORTED_TARGET OpenColorIO)

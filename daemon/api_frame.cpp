@@ -14,6 +14,7 @@
 #include "daemon/paths.hpp"
 #include "daemon/render_worker.hpp"
 #include "daemon/service.hpp"
+#include "encode/io/digest.hpp"
 #include "job/frame_job.hpp"
 
 namespace hdrd::daemon {
@@ -21,11 +22,6 @@ namespace hdrd::daemon {
 using nlohmann::json;
 
 namespace {
-
-std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 1469598103934665603ull) {
-  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
 
 // The options of a POST /v1/encode: the JSON part of a multipart body, or the query
 // string of a raw EXR body. The EXR is moved into `exr`.
@@ -98,7 +94,7 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
 
   job::JobOptions jo = daemon_job_options(*cfg);
   // The upload's identity for coalescing, before its bytes move into the job (no copy).
-  const std::string upload_key = exr.empty() ? "" : fmt::format("|exr:{}:{:016x}", exr.size(), fnv1a(exr));
+  const std::string upload_key = exr.empty() ? "" : fmt::format("|exr:{}:{}", exr.size(), io::content_digest(exr));
   job::EncodeInput input;
   if (source == job::Source::encode) {
     input.bytes = std::move(exr);

@@ -13,6 +13,7 @@
 
 #include "encode/display_target.hpp"
 #include "encode/grade/lut.hpp"
+#include "encode/io/digest.hpp"
 #include "encode/tone/tonemap.hpp"
 #include "job/pattern_params.hpp"
 
@@ -491,11 +492,9 @@ nlohmann::json FrameRequest::canonical() const {
     std::replace(p.begin(), p.end(), '.', '/');
     j[json::json_pointer("/" + p)] = v;
   }
-  if (!ui_png.empty()) {
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a of the upload, so two uploads differ
-    for (auto b : ui_png) h = (h ^ b) * 1099511628211ull;
-    j["ui"]["png_fnv1a"] = h;
-  }
+  if (!ui_png.empty())  // the upload's digest, so two uploads differ
+    j["ui"]["png_xxh3_128"] =
+        io::content_digest(std::string_view(reinterpret_cast<const char*>(ui_png.data()), ui_png.size()));
   return j;
 }
 

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git curl python3
   libopenexr-dev libimath-dev libopencolorio-dev opencolorio-tools
-  libpng-dev zlib1g-dev libisal-dev
+  libpng-dev zlib1g-dev libisal-dev libxxhash-dev
   libegl-dev libgl-dev libosmesa6-dev libgl1-mesa-dri libegl-mesa0
   libdrm-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libtinygltf-dev libstb-dev
