@@ -121,6 +121,14 @@ void check_sequence(DrmDevice& dev, std::uint32_t display_conn, std::uint32_t wb
       r.add(wb, *wb_props, "CRTC_ID", crtc);
     }
     if (next >= kFrames) return;
+    // vkms composes a state's writeback in a worker after its vblank; a commit that
+    // replaces the state before that worker ran ends the job unwritten (seen under TCG:
+    // one capture in eight all black). A display engine latches every frame it flips to,
+    // so the check lets vkms finish the previous capture before it commits the next frame.
+    if (next > 0 && cap[next - 1].fence >= 0) {
+      pollfd p{cap[next - 1].fence, POLLIN, 0};
+      poll(&p, 1, 5000);
+    }
     cap[next].frame = static_cast<std::int64_t>(*frame);
     r.add(wb, *wb_props, "WRITEBACK_FB_ID", cap[next].fb);
     r.add(wb, *wb_props, "WRITEBACK_OUT_FENCE_PTR", reinterpret_cast<std::uintptr_t>(&cap[next].fence));
@@ -140,6 +148,13 @@ void check_sequence(DrmDevice& dev, std::uint32_t display_conn, std::uint32_t wb
   for (int k = 0; k < kFrames; ++k) frames.push_back(test_frame(kW, kH, k));
   for (int k = 0; k < kFrames; ++k)
     if (auto r = presenter.push(frames[k]); !r) return check(false, fmt::format("sequence frame {}: {}", k, r.error().message));
+  // For the same reason the last capture is waited for before finish() holds the last frame
+  // and turns the display off: vkms would otherwise end that writeback job unwritten when
+  // the CRTC goes off before its composer ran (seen on 6.1 under TCG: capture 7 all black).
+  if (next > 0 && cap[next - 1].fence >= 0) {
+    pollfd p{cap[next - 1].fence, POLLIN, 0};
+    poll(&p, 1, 5000);
+  }
   auto done = presenter.finish();
   check(done.ok(), "sequence: " + (done.ok() ? std::string("finished, display off") : done.error().message));
   if (!done) return;
