@@ -14,8 +14,6 @@
 #include <fmt/format.h>
 
 extern "C" {
-#include <libavcodec/avcodec.h>
-#include <libavformat/avformat.h>
 #include <libavutil/mastering_display_metadata.h>
 #include <libavutil/opt.h>
 }
@@ -25,6 +23,7 @@ extern "C" {
 #include "encode/parallel.hpp"
 #include "encode/video/bitstream.hpp"
 #include "encode/video/encoder_config.hpp"
+#include "encode/video/libav.hpp"
 #include "encode/video/ycbcr.hpp"
 
 namespace hdrd::video {
@@ -74,7 +73,7 @@ nlohmann::json VideoResult::to_json() const {
 }
 
 void quiet_codec_logs() {
-  av_log_set_level(AV_LOG_ERROR);
+  lav::quiet_logs();  // applied when the libraries are loaded, if they are not yet
   ::setenv("SVT_LOG", "1", 0);  // SVT-AV1's own logger: 1 = errors
 }
 
@@ -84,7 +83,7 @@ namespace {
 
 std::string av_error_text(int err) {
   char buf[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(err, buf, sizeof buf);
+  lav::av_strerror(err, buf, sizeof buf);
   return buf;
 }
 
@@ -93,13 +92,13 @@ Error av_fail(const char* code, const std::string& what, int err) {
 }
 
 struct CodecContextFree {
-  void operator()(AVCodecContext* c) const { avcodec_free_context(&c); }
+  void operator()(AVCodecContext* c) const { lav::avcodec_free_context(&c); }
 };
 struct FrameFree {
-  void operator()(AVFrame* f) const { av_frame_free(&f); }
+  void operator()(AVFrame* f) const { lav::av_frame_free(&f); }
 };
 struct PacketFree {
-  void operator()(AVPacket* p) const { av_packet_free(&p); }
+  void operator()(AVPacket* p) const { lav::av_packet_free(&p); }
 };
 struct FileClose {
   void operator()(std::FILE* f) const { std::fclose(f); }
@@ -114,8 +113,8 @@ struct Muxer {
   AVFormatContext* ctx = nullptr;
   ~Muxer() {
     if (!ctx) return;
-    if (ctx->pb) avio_closep(&ctx->pb);
-    avformat_free_context(ctx);
+    if (ctx->pb) lav::avio_closep(&ctx->pb);
+    lav::avformat_free_context(ctx);
   }
 };
 
@@ -174,8 +173,8 @@ struct SequenceWriter::Impl {
   void close_encoder() {
     if (enc && opened && !flushed && config.encoder == "libsvtav1") {
       flushed = true;
-      if (avcodec_send_frame(enc.get(), nullptr) >= 0)
-        while (avcodec_receive_packet(enc.get(), packet.get()) >= 0) av_packet_unref(packet.get());
+      if (lav::avcodec_send_frame(enc.get(), nullptr) >= 0)
+        while (lav::avcodec_receive_packet(enc.get(), packet.get()) >= 0) lav::av_packet_unref(packet.get());
     }
     enc.reset();
   }
@@ -191,14 +190,14 @@ struct SequenceWriter::Impl {
 
   Result<void> spool_packets() {
     for (;;) {
-      const int rc = avcodec_receive_packet(enc.get(), packet.get());
+      const int rc = lav::avcodec_receive_packet(enc.get(), packet.get());
       if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return {};
       if (rc < 0) return av_fail("video.encoder", fmt::format("{} failed", config.encoder), rc);
       SpoolRecord r{packet->pts, packet->dts, packet->duration, packet->flags, static_cast<std::uint32_t>(packet->size)};
       const bool ok = std::fwrite(&r, sizeof r, 1, spool.get()) == 1 &&
                       std::fwrite(packet->data, 1, static_cast<std::size_t>(packet->size), spool.get()) ==
                           static_cast<std::size_t>(packet->size);
-      av_packet_unref(packet.get());
+      lav::av_packet_unref(packet.get());
       if (!ok) return make_error("io.write", fmt::format("cannot write the spool file {}: {}", spool_path.string(), std::strerror(errno)));
     }
   }
@@ -217,7 +216,7 @@ struct SequenceWriter::Impl {
 
   Result<void> encode(const EncodedFrame& f, const FrameOptions& o) {
     if (auto ok = check_frame(f); !ok) return ok;
-    if (const int rc = av_frame_make_writable(frame.get()); rc < 0) return av_fail("video.encoder", "frame buffer", rc);
+    if (const int rc = lav::av_frame_make_writable(frame.get()); rc < 0) return av_fail("video.encoder", "frame buffer", rc);
     const Planes420 planes{{frame->data[0], frame->linesize[0]}, {frame->data[1], frame->linesize[1]},
                            {frame->data[2], frame->linesize[2]}};
     const auto t0 = std::chrono::steady_clock::now();
@@ -230,7 +229,7 @@ struct SequenceWriter::Impl {
     convert_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
     frame->pts = frames;
     frame->pict_type = o.keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
-    if (const int rc = avcodec_send_frame(enc.get(), frame.get()); rc < 0)
+    if (const int rc = lav::avcodec_send_frame(enc.get(), frame.get()); rc < 0)
       return av_fail("video.encoder", fmt::format("{} refused frame {}", config.encoder, frames), rc);
     frames_light.max_cll_nits = std::max(frames_light.max_cll_nits, f.content_light.max_cll_nits);
     frames_light.max_fall_nits = std::max(frames_light.max_fall_nits, f.content_light.max_fall_nits);
@@ -259,6 +258,7 @@ Result<void> check_stream(const VideoSettings& settings, const StreamInfo& strea
 
 Result<std::unique_ptr<SequenceWriter>> SequenceWriter::open(const fs::path& outbase, const VideoSettings& settings,
                                                              const StreamInfo& stream) {
+  if (auto loaded = lav::load(); !loaded) return loaded.error();
   auto impl = std::make_unique<Impl>();
   impl->settings = settings;
   impl->stream = stream;
@@ -271,20 +271,20 @@ Result<std::unique_ptr<SequenceWriter>> SequenceWriter::open(const fs::path& out
                                                                                           : color::kRec709Luma;
   impl->output = fs::path(outbase.string() + std::string(file_extension(settings.container)));
 
-  const AVCodec* codec = avcodec_find_encoder_by_name(impl->config.encoder.c_str());
+  const AVCodec* codec = lav::avcodec_find_encoder_by_name(impl->config.encoder.c_str());
   if (!codec)
     return make_error("video.encoder", fmt::format("this libavcodec has no {} encoder", impl->config.encoder), "video.codec");
-  impl->enc.reset(avcodec_alloc_context3(codec));
-  impl->frame.reset(av_frame_alloc());
-  impl->packet.reset(av_packet_alloc());
+  impl->enc.reset(lav::avcodec_alloc_context3(codec));
+  impl->frame.reset(lav::av_frame_alloc());
+  impl->packet.reset(lav::av_packet_alloc());
   if (!impl->enc || !impl->frame || !impl->packet) return make_error("video.encoder", "out of memory");
   if (auto ok = configure(impl->config, settings, stream, *impl->enc); !ok) return ok.error();
   AVDictionary* opts = nullptr;
-  for (const auto& [k, v] : impl->config.options) av_dict_set(&opts, k.c_str(), v.c_str(), 0);
-  const int rc = avcodec_open2(impl->enc.get(), codec, &opts);
-  AVDictionaryEntry* unused = av_dict_get(opts, "", nullptr, AV_DICT_IGNORE_SUFFIX);
+  for (const auto& [k, v] : impl->config.options) lav::av_dict_set(&opts, k.c_str(), v.c_str(), 0);
+  const int rc = lav::avcodec_open2(impl->enc.get(), codec, &opts);
+  AVDictionaryEntry* unused = lav::av_dict_get(opts, "", nullptr, AV_DICT_IGNORE_SUFFIX);
   const std::string unused_key = unused ? unused->key : "";
-  av_dict_free(&opts);
+  lav::av_dict_free(&opts);
   if (rc < 0) return av_fail("video.encoder", fmt::format("cannot open {}", impl->config.encoder), rc);
   impl->opened = true;
   if (!unused_key.empty())
@@ -294,7 +294,7 @@ Result<std::unique_ptr<SequenceWriter>> SequenceWriter::open(const fs::path& out
   f->format = impl->enc->pix_fmt;
   f->width = stream.width;
   f->height = stream.height;
-  if (const int r = av_frame_get_buffer(f, 0); r < 0) return av_fail("video.encoder", "frame buffer", r);
+  if (const int r = lav::av_frame_get_buffer(f, 0); r < 0) return av_fail("video.encoder", "frame buffer", r);
   if (auto ok = impl->open_spool(); !ok) return ok.error();
   return std::unique_ptr<SequenceWriter>(new SequenceWriter(std::move(impl)));
 }
@@ -343,7 +343,7 @@ constexpr std::uint32_t kMaxExtradata = 1u << 20;
 Result<void> SequenceWriter::Impl::write_segment(const fs::path& segment) {
   if (frames == 0) return make_error("video.empty", "a video segment needs at least one frame", "frames");
   flushed = true;
-  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
+  if (const int rc = lav::avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
   if (auto ok = spool_packets(); !ok) return ok.error();
   if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
     return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
@@ -487,9 +487,9 @@ bool is_hdr(Mode m) { return m == Mode::hdr10 || m == Mode::hlg; }
 Result<void> add_static_side_data(AVStream* st, const MasteringDisplay& mastering, const io::Cta861Light& cll) {
   const io::St2086Codes c = io::st2086_codes(mastering);
   auto* md = reinterpret_cast<AVMasteringDisplayMetadata*>(
-      av_stream_new_side_data(st, AV_PKT_DATA_MASTERING_DISPLAY_METADATA, sizeof(AVMasteringDisplayMetadata)));
+      lav::av_stream_new_side_data(st, AV_PKT_DATA_MASTERING_DISPLAY_METADATA, sizeof(AVMasteringDisplayMetadata)));
   auto* cl = reinterpret_cast<AVContentLightMetadata*>(
-      av_stream_new_side_data(st, AV_PKT_DATA_CONTENT_LIGHT_LEVEL, sizeof(AVContentLightMetadata)));
+      lav::av_stream_new_side_data(st, AV_PKT_DATA_CONTENT_LIGHT_LEVEL, sizeof(AVContentLightMetadata)));
   if (!md || !cl) return make_error("video.mux", "out of memory");
   std::memset(md, 0, sizeof *md);
   const std::array<std::array<std::uint16_t, 2>, 3> rgb{c.red, c.green, c.blue};
@@ -509,12 +509,12 @@ Result<void> add_static_side_data(AVStream* st, const MasteringDisplay& masterin
 
 Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Light& cll) {
   const char* format = settings.container == Container::mp4 ? "mp4" : "matroska";
-  if (const int rc = avformat_alloc_output_context2(&m.ctx, nullptr, format, output_temp.c_str()); rc < 0)
+  if (const int rc = lav::avformat_alloc_output_context2(&m.ctx, nullptr, format, output_temp.c_str()); rc < 0)
     return av_fail("video.mux", fmt::format("no {} muxer", format), rc);
   m.ctx->flags |= AVFMT_FLAG_BITEXACT;  // no tool versions or times: the same frames give the same bytes
-  AVStream* st = avformat_new_stream(m.ctx, nullptr);
+  AVStream* st = lav::avformat_new_stream(m.ctx, nullptr);
   if (!st) return make_error("video.mux", "out of memory");
-  if (const int rc = avcodec_parameters_from_context(st->codecpar, enc.get()); rc < 0)
+  if (const int rc = lav::avcodec_parameters_from_context(st->codecpar, enc.get()); rc < 0)
     return av_fail("video.mux", "stream parameters", rc);
   // hvc1: parameter sets only in the sample entry (what Apple players require).
   if (settings.codec == Codec::hevc && settings.container == Container::mp4) st->codecpar->codec_tag = MKTAG('h', 'v', 'c', '1');
@@ -522,13 +522,13 @@ Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Li
   st->avg_frame_rate = enc->framerate;
   if (is_hdr(stream.target.mode))
     if (auto ok = add_static_side_data(st, stream.mastering, cll); !ok) return ok.error();
-  if (const int rc = avio_open(&m.ctx->pb, output_temp.c_str(), AVIO_FLAG_WRITE); rc < 0)
+  if (const int rc = lav::avio_open(&m.ctx->pb, output_temp.c_str(), AVIO_FLAG_WRITE); rc < 0)
     return av_fail("io.write", fmt::format("cannot write {}", output_temp.string()), rc);
   AVDictionary* opts = nullptr;
   // moov first, so a player (or a browser fetching GET /v1/jobs/{id}/result) starts at once.
-  if (settings.container == Container::mp4) av_dict_set(&opts, "movflags", "+faststart", 0);
-  const int rc = avformat_write_header(m.ctx, &opts);
-  av_dict_free(&opts);
+  if (settings.container == Container::mp4) lav::av_dict_set(&opts, "movflags", "+faststart", 0);
+  const int rc = lav::avformat_write_header(m.ctx, &opts);
+  lav::av_dict_free(&opts);
   if (rc < 0) return av_fail("video.mux", fmt::format("cannot start the {} file", format), rc);
   return st;
 }
@@ -536,7 +536,7 @@ Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Li
 // Every spooled packet, with its metadata inserted, into the muxer.
 Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const SequenceMetadata* meta,
                                                 const io::Cta861Light& cll) {
-  PacketPtr out(av_packet_alloc());
+  PacketPtr out(lav::av_packet_alloc());
   if (!out) return make_error("video.mux", "out of memory");
   for (int n = 0;; ++n) {
     SpoolRecord r;
@@ -546,13 +546,13 @@ Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const Se
       return make_error("io.read", fmt::format("spool file {} is truncated at packet {}", spool_path.string(), n));
     auto bytes = with_metadata(r, std::move(data), meta, cll);
     if (!bytes) return bytes.error();
-    if (const int rc = av_new_packet(out.get(), static_cast<int>(bytes->size())); rc < 0) return av_fail("video.mux", "packet", rc);
+    if (const int rc = lav::av_new_packet(out.get(), static_cast<int>(bytes->size())); rc < 0) return av_fail("video.mux", "packet", rc);
     std::memcpy(out->data, bytes->data(), bytes->size());
     out->pts = r.pts, out->dts = r.dts, out->duration = r.duration, out->flags = r.flags;
     out->stream_index = 0;
-    av_packet_rescale_ts(out.get(), enc->time_base, st->time_base);
-    if (const int rc = av_write_frame(m.ctx, out.get()); rc < 0) return av_fail("video.mux", fmt::format("packet {}", n), rc);
-    av_packet_unref(out.get());
+    lav::av_packet_rescale_ts(out.get(), enc->time_base, st->time_base);
+    if (const int rc = lav::av_write_frame(m.ctx, out.get()); rc < 0) return av_fail("video.mux", fmt::format("packet {}", n), rc);
+    lav::av_packet_unref(out.get());
   }
 }
 
@@ -585,7 +585,7 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
     return make_error("video.metadata", fmt::format("metadata covers {} frames, the video has {}", meta->frame_count(), frames));
   flushed = true;
   const auto t0 = std::chrono::steady_clock::now();
-  if (const int rc = avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
+  if (const int rc = lav::avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
   if (auto ok = spool_packets(); !ok) return ok.error();
   const auto t1 = std::chrono::steady_clock::now();
   encoder_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
@@ -601,8 +601,8 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
     auto st = start_muxer(m, cll);
     if (!st) return st.error();
     if (auto ok = copy_packets(m, *st, meta, cll); !ok) return ok.error();
-    if (const int rc = av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
-    if (const int rc = avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
+    if (const int rc = lav::av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
+    if (const int rc = lav::avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
   }
   spool.reset();
   ::unlink(spool_path.c_str());
