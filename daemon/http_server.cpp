@@ -30,6 +30,7 @@ struct HttpServer::RequestContext {
   HttpRequest req;
   std::size_t limit = 0;
   bool too_large = false;
+  bool busy = false;  // refused for room: the body is read and dropped, then 503
   bool queued = false;
   std::shared_ptr<Responder> responder;
   std::uint64_t reserved = 0;  // of the body budget, given back when the request ends
@@ -47,6 +48,12 @@ struct ConnectionInfo {
 
 // Oversized bodies up to this much beyond the limit are read and dropped before the 413.
 constexpr unsigned long long kDrainLimitBytes = 16ull << 20;
+
+Reply busy_reply() {
+  Reply busy = Reply::error(make_error("server.busy", "every connection is busy with a request; retry later"));
+  busy.headers.emplace_back("Retry-After", "1");
+  return busy;
+}
 
 Reply too_large_reply(std::size_t limit) {
   return Reply::error(make_error("request.too_large",
@@ -349,9 +356,14 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
     if (ci->socket_context) req.peer = static_cast<ConnectionInfo*>(ci->socket_context)->peer;
   connections_.header_complete(c, req.started);
   if (connections_.refused(c)) {
-    Reply busy = Reply::error(make_error("server.busy", "every connection is busy with a request; retry later"));
-    busy.headers.emplace_back("Retry-After", "1");
-    return queue(c, ctx, busy);
+    // Like an oversized body below: a body of modest size is read and dropped first, so
+    // that a client which sends before it reads sees the 503, not a broken pipe.
+    const auto* cl = req.header("content-length");
+    char* end = nullptr;
+    const unsigned long long n = cl ? std::strtoull(cl->c_str(), &end, 10) : 0;
+    if (n == 0 || !end || *end != '\0' || n > kDrainLimitBytes || req.header("expect")) return queue(c, ctx, busy_reply());
+    ctx.busy = true;
+    return MHD_YES;
   }
   auto pre = handler_.begin(req);
   if (auto* r = std::get_if<Reply>(&pre)) return queue(c, ctx, *r);
@@ -405,7 +417,7 @@ std::optional<Reply> HttpServer::refuse_early(MHD_Connection*, const HttpRequest
 // Body bytes as they stream in, kept up to the limit; beyond it they are dropped.
 void HttpServer::collect_body(MHD_Connection* c, RequestContext& ctx, const char* data, std::size_t size) {
   connections_.body_bytes(c, size);
-  if (ctx.too_large || ctx.queued) return;
+  if (ctx.too_large || ctx.busy || ctx.queued) return;
   if (ctx.req.body.size() + size > ctx.limit) {
     ctx.too_large = true;
     std::string().swap(ctx.req.body);
@@ -479,6 +491,7 @@ int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, co
     }
     return queue(c, *ctx, r ? *r : Reply::error(make_error("internal", "resumed without a reply")));
   }
+  if (ctx->busy) return queue(c, *ctx, busy_reply());
   if (ctx->too_large) return queue(c, *ctx, too_large_reply(ctx->limit));
   if (auto bad = split_multipart(c, *ctx)) return queue(c, *ctx, *bad);
   return dispatch(c, *ctx);

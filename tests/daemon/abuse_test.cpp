@@ -301,6 +301,34 @@ TEST(DaemonAbuse, SlowAndIdleConnectionsDoNotStopNewClients) {
   EXPECT_TRUE(d.alive());
 }
 
+// Every connection holds a request in progress: a new one is refused with 503
+// server.busy. A client that sends its whole request (4 MiB, more than the socket buffers
+// hold) before it reads gets that answer, not a broken pipe: the body is read and dropped.
+TEST(DaemonAbuse, ARefusalForRoomIsA503EvenForAClientStillSendingItsBody) {
+  DaemonProcess d("max_connections = 2\nmax_connections_per_peer = 2\n");
+  REQUIRE_DAEMON(d);
+  RawConnection a(d.socket()), b(d.socket());
+  // "100 Continue" says the daemon has taken the header: the connection is in its body.
+  const std::string slow_head = "POST /v1/encode HTTP/1.1\r\nHost: x\r\nContent-Type: image/x-exr\r\n"
+                                "Content-Length: 1000000\r\nExpect: 100-continue\r\n\r\n";
+  for (RawConnection* s : {&a, &b}) {
+    ASSERT_TRUE(s->send(slow_head));
+    ASSERT_NE(s->read_until("100 Continue\r\n\r\n", std::chrono::seconds(10)).find("100 Continue"), std::string::npos);
+    ASSERT_TRUE(s->send("v/1"));
+  }
+  RawConnection c(d.socket());
+  const std::string body = R"({"width":64,"pad":")" + std::string(4 << 20, 'p') + "\"}";
+  const bool sent = c.send(fmt::format("POST /v1/render HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                                       "Content-Length: {}\r\n\r\n", body.size()) + body);
+  EXPECT_TRUE(sent) << "the daemon closed the connection while the body was being sent";
+  auto [text, closed] = c.read_until_closed(std::chrono::seconds(10));
+  const auto reply = parse_reply(text);
+  EXPECT_EQ(reply.status, 503) << text.substr(0, 300);
+  EXPECT_EQ(error_code(reply.body), "server.busy");
+  EXPECT_NE(text.find("Retry-After: 1"), std::string::npos);
+  EXPECT_TRUE(d.alive());
+}
+
 TEST(DaemonAbuse, TricklingHeadersAndSlowBodiesAreClosedWithA408) {
   DaemonProcess d("header_timeout_s = 1\nbody_grace_s = 0.5\nmin_body_bytes_per_s = 100000\n");
   REQUIRE_DAEMON(d);

@@ -141,6 +141,21 @@ class RawConnection {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
   }
+  // Reads until `needle` arrived, the peer closed or `limit` passed; returns what arrived.
+  std::string read_until(const std::string& needle, std::chrono::seconds limit) {
+    std::string out;
+    const auto end = std::chrono::steady_clock::now() + limit;
+    char buf[4096];
+    while (out.find(needle) == std::string::npos && std::chrono::steady_clock::now() < end) {
+      timeval tv{0, 100000};
+      ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n == 0) break;
+      if (n > 0) out.append(buf, std::size_t(n));
+      else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) break;
+    }
+    return out;
+  }
   // Reads until the peer closes or `limit` passes; returns what arrived and whether it closed.
   std::pair<std::string, bool> read_until_closed(std::chrono::seconds limit) {
     std::string out;
