@@ -149,6 +149,28 @@ TEST(OverlayBadInput, AbsurdSizesAreRejectedBeforeAllocating) {
   EXPECT_EQ(read_png_info_memory(with_size(100000, 1)).error().code, "png.size");
 }
 
+// png_fuzz (2 Dec): a 101-byte file whose second chunk, an sPLT, declares 1 610 612 742
+// bytes made libpng allocate that much before reading. Every chunk's length is now checked
+// against the bytes left, for every chunk type, before libpng runs.
+TEST(OverlayBadInput, AChunkLongerThanTheFileIsRefusedBeforeLibpngAllocatesIt) {
+  Spec s{2, 2, 8, 2, false, {}};
+  const Bytes good = pngtest::encode(s, std::vector<std::uint8_t>(14, 0));  // 2 rows: filter byte + 6
+  ASSERT_TRUE(read_overlay_png_memory(good).ok());
+  for (const char* type : {"sPLT", "iCCP", "zTXt", "IDAT", "abCd"}) {
+    Bytes bad(good.begin(), good.begin() + 33);  // signature + IHDR
+    const std::uint32_t n = 0x60000006u;
+    for (int k = 3; k >= 0; --k) bad.push_back(static_cast<std::uint8_t>(n >> (8 * k)));
+    bad.insert(bad.end(), type, type + 4);
+    bad.insert(bad.end(), {0xff, 0, 0, 0, 0x80, 0xff, 1, 2, 3, 4});
+    auto e = read_overlay_png_memory(bad);
+    ASSERT_FALSE(e.ok()) << type;
+    EXPECT_EQ(e.error().code, "png.truncated") << type;
+    EXPECT_NE(e.error().message.find(std::string(type) + " chunk declares 1610612742 bytes, 6 are left"), std::string::npos)
+        << e.error().message;
+    EXPECT_EQ(read_png_info_memory(bad).error().code, "png.truncated") << type;
+  }
+}
+
 // Issue 14: a 21 KB PNG declaring 16384 x 8192 decoded to 4.3 GB. A caller's limits are
 // checked against the declared size (IHDR) before libpng allocates or inflates anything.
 TEST(OverlayBadInput, DeclaredSizeIsCheckedAgainstTheCallersLimits) {
