@@ -61,6 +61,7 @@ Scheduler::~Scheduler() { drain_and_stop(std::chrono::seconds(0)); }
 void Scheduler::start() {
   for (int i = 0; i < options_.render_workers; ++i) threads_.emplace_back([this, i] { render_loop(i); });
   for (int i = 0; i < options_.encode_threads; ++i) threads_.emplace_back([this] { encode_loop(); });
+  threads_.emplace_back([this] { trim_loop(); });
   std::unique_lock lock(mu_);
   ready_cv_.wait(lock, [&] { return started_workers_ == options_.render_workers; });
 }
@@ -221,6 +222,33 @@ void Scheduler::encode_loop() {
   }
 }
 
+// Hands the allocator's free memory back once no job has run for trim_idle after a large
+// one. Trimming after every large job instead made each job of a burst fault its buffers
+// in afresh (docs/performance-daemon.md, "Memory").
+void Scheduler::trim_loop() {
+  std::unique_lock lock(mu_);
+  while (!stopping_) {
+    if (!trim_due_) {
+      trim_cv_.wait(lock, [&] { return stopping_ || trim_due_.has_value(); });
+      continue;
+    }
+    const auto at = *trim_due_ + options_.trim_idle;
+    if (Clock::now() < at) {
+      trim_cv_.wait_until(lock, at);
+      continue;  // a later job may have moved it, or the daemon is stopping
+    }
+    if (running_ > 0 || !render_queue_.empty() || !encode_queue_.empty()) {  // still busy: wait for a pause
+      trim_due_ = Clock::now();
+      continue;
+    }
+    trim_due_.reset();
+    ++trims_;
+    lock.unlock();
+    ::malloc_trim(0);
+    lock.lock();
+  }
+}
+
 void Scheduler::release_memory(Job& job) {
   if (job.memory_released) return;
   job.memory_released = true;
@@ -242,11 +270,15 @@ void Scheduler::finish_job(const std::shared_ptr<Job>& job, std::shared_ptr<cons
   }
   for (auto& w : waiters)
     if (!w->done.exchange(true)) w->deliver(reply, w->coalesced);
-  // The job's buffers are freed by now, except the reply, which the waiters share. glibc
-  // keeps freed heap memory for reuse (in every thread's arena); handing it back after a
-  // large job keeps a burst from staying resident (docs/performance-daemon.md, "Memory").
+  // The job's buffers are freed by now, except the reply, which the waiters share until it
+  // is sent. glibc keeps freed heap memory for reuse (in every thread's arena); it is handed
+  // back once the daemon is idle (trim_loop), which keeps a burst from staying resident.
   reply.reset();
-  if (trim) ::malloc_trim(0);
+  if (trim) {
+    std::lock_guard lock(mu_);
+    trim_due_ = Clock::now();
+    trim_cv_.notify_all();
+  }
 }
 
 void Scheduler::drain_and_stop(std::chrono::duration<double> timeout) {
@@ -269,6 +301,7 @@ void Scheduler::drain_and_stop(std::chrono::duration<double> timeout) {
     }
     render_cv_.notify_all();
     encode_cv_.notify_all();
+    trim_cv_.notify_all();
   }
   for (auto& job : left) {
     std::vector<std::shared_ptr<Waiter>> waiters;
@@ -312,6 +345,7 @@ SchedulerStats Scheduler::stats() const {
   s.capacity = options_.render_workers + options_.encode_threads + options_.queue_depth;
   s.memory_in_flight_bytes = memory_in_flight_;
   s.memory_budget_bytes = options_.memory_budget_bytes;
+  s.trims = trims_;
   for (const auto& w : worker_info_) s.workers.push_back(w);
   return s;
 }

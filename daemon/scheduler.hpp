@@ -5,8 +5,10 @@
 // for any more is cancelled at its next stage boundary. Admission also weighs memory: each
 // job carries an estimate of what it will allocate (memory.hpp), and the jobs admitted
 // together stay within a budget; one more is refused (503 queue.memory) rather than let
-// the resident set grow without bound. After a large job the allocator's free memory is
-// handed back to the system (malloc_trim), so that a burst does not leave it resident.
+// the resident set grow without bound. Once the daemon has been idle for a moment after a
+// large job, the allocator's free memory is handed back to the system (malloc_trim), so
+// that a burst does not leave it resident; back-to-back jobs reuse it instead of faulting
+// fresh pages in for every frame.
 #pragma once
 
 #include <atomic>
@@ -17,6 +19,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -87,8 +90,10 @@ struct SchedulerOptions {
   int queue_depth = 16;         // admitted jobs beyond those the workers can run at once
   bool coalesce = true;
   std::uint64_t memory_budget_bytes = std::uint64_t(4) << 30;  // admitted jobs' estimates together
-  // Jobs whose estimate is at least this return the allocator's free memory afterwards.
+  // Jobs whose estimate is at least this return the allocator's free memory afterwards,
+  // once no job has run for trim_idle (so that the jobs of a burst reuse it).
   std::uint64_t trim_after_bytes = std::uint64_t(32) << 20;
+  std::chrono::milliseconds trim_idle{2000};
 };
 
 struct SchedulerStats {
@@ -97,6 +102,7 @@ struct SchedulerStats {
   int running = 0;
   int render_workers = 0, render_workers_ready = 0, encode_threads = 0, capacity = 0;
   std::uint64_t memory_in_flight_bytes = 0, memory_budget_bytes = 0;
+  std::uint64_t trims = 0;      // times the allocator's free memory was handed back (trim_loop)
   nlohmann::json workers = nlohmann::json::array();  // per render worker: info or error
 };
 
@@ -138,7 +144,11 @@ class Scheduler {
   SchedulerOptions options_;
   RenderResourceFactory factory_;
   mutable std::mutex mu_;
-  std::condition_variable render_cv_, encode_cv_, idle_cv_, ready_cv_;
+  std::condition_variable render_cv_, encode_cv_, idle_cv_, ready_cv_, trim_cv_;
+  // The idle trim: when a large job finished last (unset: nothing to give back).
+  std::optional<Clock::time_point> trim_due_;
+  std::uint64_t trims_ = 0;
+  void trim_loop();
   std::deque<std::shared_ptr<Job>> render_queue_, encode_queue_;
   std::shared_ptr<const Reply> cancelled_reply() const;
 

@@ -56,15 +56,18 @@ std::shared_ptr<const Config> Service::config() const {
   return config_;
 }
 
-// glibc raises its mmap threshold to the size of every large block freed (up to 32 MiB),
-// after which frame-sized buffers come from the heap, fragment it and stay resident: a
-// burst of large requests left the RSS 60 % above its warm-up level. A fixed threshold
-// (which also turns the adjustment off) keeps every buffer of 1 MiB or more in its own
-// mapping, returned when freed: 3 % (docs/performance-daemon.md, "Memory").
-constexpr int kMmapThresholdBytes = 1 << 20;
+// Where frame-sized buffers live decides both speed and memory. With a threshold of 1 MiB
+// every one had its own mapping, returned when freed, so every request faulted its ~200 MB
+// in afresh: ~50 000 page faults for a 4K /v1/encode, most of what the daemon added to the
+// same work in-process. With 256 MiB (fixed, which also turns glibc's own adjustment off)
+// they come from the arenas, and the next job reuses them; the scheduler hands the free
+// memory back once the daemon has been idle for trim_idle after a large job
+// (Scheduler::trim_loop), so that a burst does not stay resident (docs/performance-daemon.md,
+// "Memory"). Blocks larger than an arena's heap (64 MiB) are still mapped on their own.
+constexpr int kMmapThresholdBytes = 256 << 20;
 
 void Service::start() {
-  ::mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes);
+  if (::mallopt(M_MMAP_THRESHOLD, kMmapThresholdBytes) != 1) spdlog::warn("glibc refused an mmap threshold of 256 MiB");
   auto cfg = config();
   set_log_level(cfg->log.level);
   token_ = read_token(cfg->server);

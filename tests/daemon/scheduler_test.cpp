@@ -104,6 +104,48 @@ TEST(Scheduler, AdmitsUpToCapacityThenRefuses) {
   s.drain_and_stop(std::chrono::seconds(5));
 }
 
+// The allocator's free memory goes back once the daemon is idle after a large job, not
+// between the jobs of a burst (they reuse it), and never for small jobs alone.
+TEST(Scheduler, FreeMemoryIsHandedBackOnceIdleAfterALargeJob) {
+  SchedulerOptions o = options(1, 1, 4, false);
+  o.trim_idle = std::chrono::milliseconds(100);
+  Scheduler s(o, fake_factory());
+  s.start();
+  auto job = [](std::uint64_t bytes, std::chrono::milliseconds takes) {
+    JobSpec j;
+    j.deadline = Clock::now() + std::chrono::hours(1);
+    j.memory_bytes = bytes;
+    j.finish = [takes](const JobControl&) {
+      std::this_thread::sleep_for(takes);
+      return Reply::json(200, "{}");
+    };
+    return j;
+  };
+  auto run = [&](std::uint64_t bytes, std::chrono::milliseconds takes) {
+    Delivery d;
+    ASSERT_TRUE(s.submit(job(bytes, takes), d.fn(), false).ok());
+    d.future.get();
+  };
+  const std::uint64_t large = o.trim_after_bytes, small = o.trim_after_bytes - 1;
+  run(small, std::chrono::milliseconds(0));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(s.stats().trims, 0u) << "a small job gives nothing back";
+  for (int i = 0; i < 5; ++i) run(large, std::chrono::milliseconds(20));  // a burst
+  EXPECT_EQ(s.stats().trims, 0u) << "no trim between the jobs of a burst";
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  EXPECT_EQ(s.stats().trims, 1u) << "one trim once idle";
+  // Busy with a long job past trim_idle: the trim waits until it is over.
+  run(large, std::chrono::milliseconds(0));
+  Delivery d;
+  ASSERT_TRUE(s.submit(job(small, std::chrono::milliseconds(400)), d.fn(), false).ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  EXPECT_EQ(s.stats().trims, 1u) << "no trim while a job runs";
+  d.future.get();
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  EXPECT_EQ(s.stats().trims, 2u);
+  s.drain_and_stop(std::chrono::seconds(5));
+}
+
 TEST(Scheduler, IdenticalKeysShareOneJob) {
   Scheduler s(options(1, 1, 4, true), fake_factory());
   s.start();
