@@ -85,6 +85,7 @@ constexpr StatusEntry kStatus[] = {
     {"video.mux", 500},
     {"video.encoder", 500},
     {"video.state", 500},
+    {"video.libav", 500},  // FFmpeg's libraries missing on the daemon's machine (encode/video/libav.hpp)
     {"video.", 422},
     {"sequence.", 422},
     {"input.", 422},    // an EXR sequence that cannot be read as one (a gap, no match, an empty list)

@@ -115,7 +115,9 @@ TEST(WireError, StatusPerCode) {
       {"io.no_space", 507},          {"file.too_large", 422},        {"request.query", 400},
       {"request.length_required", 411}, {"request.header_timeout", 408}, {"request.body_timeout", 408},
       {"server.busy", 503},          {"queue.memory", 503},          {"request.memory", 400},
-      {"request.depth", 400}};
+      {"request.depth", 400},
+      // a missing FFmpeg on the daemon's machine is the daemon's fault; what a codec cannot do is the request's
+      {"video.libav", 500},          {"video.codec", 422}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);
