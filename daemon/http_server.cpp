@@ -49,6 +49,16 @@ struct ConnectionInfo {
 // Oversized bodies up to this much beyond the limit are read and dropped before the 413.
 constexpr unsigned long long kDrainLimitBytes = 16ull << 20;
 
+// The request's Content-Length when it is a plain decimal number.
+std::optional<unsigned long long> declared_length(const HttpRequest& req) {
+  const auto* cl = req.header("content-length");
+  if (!cl) return std::nullopt;
+  char* end = nullptr;
+  const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
+  if (!end || *end != '\0') return std::nullopt;
+  return n;
+}
+
 Reply busy_reply() {
   Reply busy = Reply::error(make_error("server.busy", "every connection is busy with a request; retry later"));
   busy.headers.emplace_back("Retry-After", "1");
@@ -358,10 +368,8 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
   if (connections_.refused(c)) {
     // Like an oversized body below: a body of modest size is read and dropped first, so
     // that a client which sends before it reads sees the 503, not a broken pipe.
-    const auto* cl = req.header("content-length");
-    char* end = nullptr;
-    const unsigned long long n = cl ? std::strtoull(cl->c_str(), &end, 10) : 0;
-    if (n == 0 || !end || *end != '\0' || n > kDrainLimitBytes || req.header("expect")) return queue(c, ctx, busy_reply());
+    const unsigned long long n = declared_length(req).value_or(0);
+    if (n == 0 || n > kDrainLimitBytes || req.header("expect")) return queue(c, ctx, busy_reply());
     ctx.busy = true;
     return MHD_YES;
   }
@@ -369,17 +377,16 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
   if (auto* r = std::get_if<Reply>(&pre)) return queue(c, ctx, *r);
   if (auto bad = refuse_early(c, req)) return queue(c, ctx, *bad);
   ctx.limit = std::get<std::size_t>(pre);
-  if (const auto* cl = req.header("content-length")) {
-    char* end = nullptr;
-    const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
-    if (end && *end == '\0' && n > ctx.limit) {
+  if (const auto length = declared_length(req)) {
+    const unsigned long long n = *length;
+    if (n > ctx.limit) {
       // A client that waits for "100 Continue", or one about to send far too much, is
       // answered at once (and the connection closed). A modestly oversized body is read
       // and dropped first, so that simple clients which send before they read still
       // see the 413 instead of a broken pipe.
       if (req.header("expect") || n > ctx.limit + kDrainLimitBytes) return queue(c, ctx, too_large_reply(ctx.limit));
       ctx.too_large = true;
-    } else if (end && *end == '\0' && n > 0) {
+    } else if (n > 0) {
       // Bodies being received count against the memory budget too: a hundred clients
       // uploading at once would otherwise hold gigabytes before any job is admitted.
       const std::uint64_t budget = body_budget_bytes_.load();

@@ -257,7 +257,6 @@ void Scheduler::release_memory(Job& job) {
 
 void Scheduler::finish_job(const std::shared_ptr<Job>& job, std::shared_ptr<const Reply> reply) {
   std::vector<std::shared_ptr<Waiter>> waiters;
-  bool trim = false;
   {
     std::lock_guard lock(mu_);
     if (auto it = by_key_.find(job->spec.key); it != by_key_.end() && it->second == job) by_key_.erase(it);
@@ -265,20 +264,18 @@ void Scheduler::finish_job(const std::shared_ptr<Job>& job, std::shared_ptr<cons
     --running_;
     active_.erase(job);
     release_memory(*job);
-    trim = job->spec.memory_bytes >= options_.trim_after_bytes;
+    if (job->spec.memory_bytes >= options_.trim_after_bytes) {  // handed back once idle (trim_loop)
+      trim_due_ = Clock::now();
+      trim_cv_.notify_all();
+    }
     idle_cv_.notify_all();
   }
   for (auto& w : waiters)
     if (!w->done.exchange(true)) w->deliver(reply, w->coalesced);
   // The job's buffers are freed by now, except the reply, which the waiters share until it
   // is sent. glibc keeps freed heap memory for reuse (in every thread's arena); it is handed
-  // back once the daemon is idle (trim_loop), which keeps a burst from staying resident.
-  reply.reset();
-  if (trim) {
-    std::lock_guard lock(mu_);
-    trim_due_ = Clock::now();
-    trim_cv_.notify_all();
-  }
+  // back once the daemon is idle (trim_loop), after the reply too, which keeps a burst from
+  // staying resident.
 }
 
 void Scheduler::drain_and_stop(std::chrono::duration<double> timeout) {

@@ -10,10 +10,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cctype>
 #include <csetjmp>
 #include <cstring>
 #include <fstream>
-#include <cctype>
 #include <optional>
 #include <span>
 #include <thread>
@@ -445,6 +445,12 @@ Result<void> write_png(const fs::path& path, const EncodedFrame& frame, const Pn
 
 namespace {
 
+// A PNG's lengths and sizes: big-endian (PNG 3rd ed. §7.1). The caller checks the bounds.
+std::uint32_t read_be32(std::span<const std::uint8_t> b, std::size_t at) {
+  return (std::uint32_t(b[at]) << 24) | (std::uint32_t(b[at + 1]) << 16) | (std::uint32_t(b[at + 2]) << 8) |
+         std::uint32_t(b[at + 3]);
+}
+
 struct PngReadJob {
   std::span<const std::uint8_t> bytes;
   std::size_t pos = 0;
@@ -527,8 +533,7 @@ struct ReadStructs {
 std::optional<Error> check_chunk_lengths(std::span<const std::uint8_t> bytes, const std::string& name) {
   std::size_t at = 8;  // after the signature
   while (bytes.size() - at >= 8) {
-    const std::uint32_t n = (std::uint32_t(bytes[at]) << 24) | (std::uint32_t(bytes[at + 1]) << 16) |
-                            (std::uint32_t(bytes[at + 2]) << 8) | std::uint32_t(bytes[at + 3]);
+    const std::uint32_t n = read_be32(bytes, at);
     std::string type(reinterpret_cast<const char*>(bytes.data() + at + 4), 4);
     for (char& ch : type)
       if (!std::isalpha(static_cast<unsigned char>(ch))) ch = '?';
@@ -659,11 +664,7 @@ std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes) {
   static const std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (bytes.size() < 26 || std::memcmp(bytes.data(), kSignature, 8) != 0 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0)
     return std::nullopt;
-  const auto be32 = [&](std::size_t o) {
-    return (std::uint32_t(bytes[o]) << 24) | (std::uint32_t(bytes[o + 1]) << 16) | (std::uint32_t(bytes[o + 2]) << 8) |
-           std::uint32_t(bytes[o + 3]);
-  };
-  return PngHeader{be32(16), be32(20), bytes[24], bytes[25]};
+  return PngHeader{read_be32(bytes, 16), read_be32(bytes, 20), bytes[24], bytes[25]};
 }
 
 std::uint64_t overlay_decode_bytes(std::uint32_t width, std::uint32_t height) {

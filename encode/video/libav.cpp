@@ -34,9 +34,8 @@ void load_once() {
     handles[i] = ::dlopen(kLibraries[i], RTLD_NOW | RTLD_LOCAL);
     if (!handles[i]) {
       const char* why = ::dlerror();
-      g_error = make_error("video.libav", fmt::format("video output needs FFmpeg's {} (Debian: the libavformat59 and "
-                                                      "libavcodec59 packages): {}",
-                                                      kLibraries[i], why ? why : "not found"));
+      g_error = make_error("video.libav", fmt::format("video output needs FFmpeg's {}: {}", kLibraries[i],
+                                                      why ? why : "not found"));
       return;
     }
   }
