@@ -17,6 +17,7 @@
 
 #include <fmt/format.h>
 
+#include "encode/kernel/light_kernels.hpp"
 #include "encode/kernel/pipeline_internal.hpp"
 #include "encode/colour/transfer.hpp"
 
@@ -404,7 +405,20 @@ std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits, 
                       color::kRec2020Luma.z * in.to_working.m[2][2]};
   std::vector<float> out((n + step - 1) / step);
   parallel_for(out.size(), 0, 1 << 16, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) out[k] = static_cast<float>(color::dot(luma, input_pixel(in, k * step)) * unit_nits);
+    if (in.image) {
+      for (std::size_t k = begin; k < end; ++k) out[k] = static_cast<float>(color::dot(luma, input_pixel(in, k * step)) * unit_nits);
+      return;
+    }
+    // Half pixels: the halves converted a block at a time by the SIMD kernel (exactly as
+    // half_to_float), the sum in double as above.
+    constexpr std::size_t kBlock = 1024;
+    float r[kBlock], g[kBlock], b[kBlock];
+    for (std::size_t k0 = begin; k0 < end; k0 += kBlock) {
+      const std::size_t m = std::min(kBlock, end - k0);
+      kernels::strided_half_rgb(in.half->rgba.data() + k0 * step * 4, step, m, r, g, b);
+      for (std::size_t i = 0; i < m; ++i)
+        out[k0 + i] = static_cast<float>(color::dot(luma, Vec3{r[i], g[i], b[i]}) * unit_nits);
+    }
   });
   return out;
 }

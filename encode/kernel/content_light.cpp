@@ -1,12 +1,14 @@
 // The light of an encoded frame, decoded from its codes (REFERENCE.md §6): the one place
 // that turns codes back into display light for MaxCLL/MaxFALL and for the per-frame
-// statistics of sequences (encode/video/frame_statistics.hpp).
+// statistics of sequences (encode/video/sequence_metadata.hpp).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 
 #include "encode/colour/transfer.hpp"
 #include "encode/frame.hpp"
+#include "encode/kernel/light_kernels.hpp"
 #include "encode/kernel/pipeline_internal.hpp"
 
 namespace hdrd {
@@ -20,18 +22,9 @@ int pq_bin(double nits) {
 
 // HDR10: maxRGB is the light of the largest code, so a histogram of codes holds it all.
 void measure_pq_codes(const EncodedFrame& f, const detail::SignalStage& sig, FrameLight& out) {
-  std::vector<std::uint64_t> per_code(sig.code_to_nits.size(), 0);
-  std::uint32_t max_code[3] = {0, 0, 0};
-  for (int y = 0; y < f.height; ++y) {
-    const std::uint8_t* row = f.data.data() + static_cast<std::size_t>(y) * f.stride_bytes;
-    for (int x = 0; x < f.width; ++x) {
-      std::uint32_t w;
-      std::memcpy(&w, row + static_cast<std::size_t>(x) * 4, 4);
-      const std::uint32_t r = w & 1023, g = (w >> 10) & 1023, b = (w >> 20) & 1023;
-      max_code[0] = std::max(max_code[0], r), max_code[1] = std::max(max_code[1], g), max_code[2] = std::max(max_code[2], b);
-      ++per_code[std::max({r, g, b})];
-    }
-  }
+  std::array<std::uint64_t, 1024> per_code{};
+  std::array<std::uint32_t, 3> max_code{};
+  kernels::max_code_histogram(f.data.data(), f.width, f.height, f.stride_bytes, per_code, max_code);
   for (int c = 0; c < 3; ++c) out.max_channel_nits[static_cast<std::size_t>(c)] = sig.code_to_nits[max_code[c]];
   double sum = 0;
   bool any = false;

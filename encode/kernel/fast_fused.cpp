@@ -12,6 +12,7 @@
 #include "encode/kernel/constants.hpp"
 #include "encode/kernel/fast_fused.hpp"
 #include "encode/kernel/float_lut.hpp"
+#include "encode/kernel/half-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace hdrd::kernels {
@@ -161,26 +162,6 @@ struct CodeLight {
 HWY_INLINE VF sanitize(DF df, VF v) {
   const VF c = hn::Min(hn::Max(v, hn::Set(df, -1e30f)), hn::Set(df, 1e30f));
   return hn::IfThenElseZero(hn::Eq(v, v), c);  // NaN -> 0
-}
-
-// IEEE half -> float. F16C where the target has it; elsewhere by bits, because Highway's
-// emulation turns NaN into Inf (and the documented rule treats them differently).
-template <class VU16>
-HWY_INLINE VF half_to_float(DF df, VU16 h16) {
-#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-  return hn::PromoteTo(df, hn::BitCast(hn::Rebind<hwy::float16_t, DF>(), h16));
-#else
-  const DU du;
-  const DI di;
-  const auto h = hn::PromoteTo(du, h16);
-  const auto mag = hn::And(h, hn::Set(du, 0x7FFFu));
-  // Normal and subnormal halves: the bits moved into place, rescaled by 2^(127 - 15).
-  VF f = hn::Mul(hn::BitCast(df, hn::ShiftLeft<13>(mag)), hn::Set(df, 5.192296858534828e33f));
-  const auto inf_nan = hn::Gt(hn::BitCast(di, mag), hn::Set(di, 0x7BFF));
-  f = hn::IfThenElse(hn::RebindMask(df, inf_nan),
-                     hn::BitCast(df, hn::Or(hn::ShiftLeft<13>(mag), hn::Set(du, 0x7F800000u))), f);
-  return hn::Or(f, hn::BitCast(df, hn::ShiftLeft<16>(hn::And(h, hn::Set(du, 0x8000u)))));
-#endif
 }
 
 // What shapes a row's loops: fixed at compile time for the common HDR10 frame (half
