@@ -422,3 +422,44 @@ TEST(SignalStage, CodeLightFitWithinAMilliNit) {
   EXPECT_TRUE(narrow.code_nits_poly.empty()) << narrow.code_nits_poly_error;
   EXPECT_GT(narrow.code_nits_poly_error, 1.0);
 }
+
+// The luminance samples metering and the temporal decisions read: the same numbers from a
+// half image (the SIMD half path) as from the float image of the same values, and each one
+// BT.2020's luma of its pixel (Kr 0.2627, Kb 0.0593, in BT.2020 input) times the unit, at
+// the documented positions (every step-th pixel). NaN and Inf pixels stay non-finite.
+TEST(SceneLuminance, HalfAndFloatInputGiveTheSameSamples) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> light(0.0f, 40.0f);
+  const int w = 333, h = 97;  // n / max_samples leaves a partial block and vector
+  Image img(w, h);
+  ImageHalf half(w, h);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const float v = i % 101 == 0 ? NAN : (i % 103 == 0 ? INFINITY : light(rng) * (i % 5 == 0 ? 1e-4f : 1.0f));
+      half.rgba[i * 4 + c] = float_to_half(v);
+      img.rgba[i * 4 + c] = half_to_float(half.rgba[i * 4 + c]);  // the same values
+    }
+    half.rgba[i * 4 + 3] = float_to_half(1.0f), img.rgba[i * 4 + 3] = 1.0f;
+  }
+  SceneInput from_half, from_float;
+  from_half.half = &half, from_float.image = &img;
+  from_half.to_working = from_float.to_working = color::to_working(color::Space::rec2020);
+  for (const std::size_t max_samples : {std::size_t{1} << 21, std::size_t{4000}, std::size_t{777}}) {
+    const auto a = scene_luminance_nits(from_half, 203.0, max_samples);
+    const auto b = scene_luminance_nits(from_float, 203.0, max_samples);
+    ASSERT_EQ(a.size(), b.size());
+    const std::size_t step = std::max<std::size_t>(1, img.pixel_count() / max_samples);
+    ASSERT_EQ(a.size(), (img.pixel_count() + step - 1) / step);
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      const float* p = img.rgba.data() + k * step * 4;
+      const double want = (0.2627 * p[0] + 0.6780 * p[1] + 0.0593 * p[2]) * 203.0;
+      if (!std::isfinite(want)) {
+        EXPECT_FALSE(std::isfinite(a[k])) << k;
+        EXPECT_FALSE(std::isfinite(b[k])) << k;
+        continue;
+      }
+      EXPECT_EQ(a[k], b[k]) << "sample " << k << " step " << step;
+      EXPECT_NEAR(a[k], want, 1e-5 * want + 1e-9) << "sample " << k << " step " << step;
+    }
+  }
+}
