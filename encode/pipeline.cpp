@@ -383,15 +383,6 @@ Result<void> check_input(const SceneInput& in) {
   return {};
 }
 
-Vec3 input_pixel(const SceneInput& in, std::size_t i) {
-  if (in.image) {
-    const float* p = in.image->rgba.data() + i * 4;
-    return {p[0], p[1], p[2]};
-  }
-  const std::uint16_t* p = in.half->rgba.data() + i * 4;
-  return {detail::half_to_float(p[0]), detail::half_to_float(p[1]), detail::half_to_float(p[2])};
-}
-
 }  // namespace
 
 std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits, std::size_t max_samples) {
@@ -406,11 +397,14 @@ std::vector<float> scene_luminance_nits(const SceneInput& in, double unit_nits, 
   std::vector<float> out((n + step - 1) / step);
   parallel_for(out.size(), 0, 1 << 16, [&](std::size_t begin, std::size_t end) {
     if (in.image) {
-      for (std::size_t k = begin; k < end; ++k) out[k] = static_cast<float>(color::dot(luma, input_pixel(in, k * step)) * unit_nits);
+      for (std::size_t k = begin; k < end; ++k) {
+        const float* p = in.image->rgba.data() + k * step * 4;
+        out[k] = static_cast<float>(color::dot(luma, Vec3{p[0], p[1], p[2]}) * unit_nits);
+      }
       return;
     }
     // Half pixels: the halves converted a block at a time by the SIMD kernel (exactly as
-    // half_to_float), the sum in double as above.
+    // half_to_float), the sum in double as for float pixels.
     constexpr std::size_t kBlock = 1024;
     float r[kBlock], g[kBlock], b[kBlock];
     for (std::size_t k0 = begin; k0 < end; k0 += kBlock) {

@@ -16,8 +16,8 @@ namespace hdrd::kernels {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// Codes per chunk: the SIMD extraction fills a chunk, the scalar counting empties it. A
-// multiple of every target's lane count.
+// Samples per chunk: the SIMD step fills a chunk, the scalar one empties it (the codes'
+// counting) or fills it (the halves' gather). A multiple of every target's lane count.
 constexpr int kChunk = 512;
 
 // Four interleaved histograms: neighbouring pixels often share a code, and one table's
@@ -70,28 +70,22 @@ void StridedHalfRgbImpl(const std::uint16_t* rgba, std::size_t step, std::size_t
   const hn::ScalableTag<float> df;
   const hn::Rebind<std::uint16_t, decltype(df)> du16;
   const std::size_t N = hn::Lanes(df);
-  alignas(64) std::uint16_t hr[kChunk], hg[kChunk], hb[kChunk];
+  alignas(64) std::uint16_t planes[3][kChunk];
+  alignas(64) float floats[3][kChunk];
+  float* const out[3] = {r, g, b};
   for (std::size_t k0 = 0; k0 < count; k0 += kChunk) {
     const std::size_t n = std::min<std::size_t>(kChunk, count - k0);
-    // The gather: one 8-byte pixel per sample, split into planes the vectors read.
+    // The gather: one 8-byte pixel per sample, split into planes the vectors read, the
+    // last vector's unused lanes zero.
     for (std::size_t i = 0; i < n; ++i) {
       const std::uint16_t* p = rgba + (k0 + i) * step * 4;
-      hr[i] = p[0], hg[i] = p[1], hb[i] = p[2];
+      planes[0][i] = p[0], planes[1][i] = p[1], planes[2][i] = p[2];
     }
-    std::size_t i = 0;
-    auto half = [&](const std::uint16_t* h) { return half_to_float(df, hn::LoadU(du16, h)); };
-    for (; i + N <= n; i += N) {
-      hn::StoreU(half(hr + i), df, r + k0 + i);
-      hn::StoreU(half(hg + i), df, g + k0 + i);
-      hn::StoreU(half(hb + i), df, b + k0 + i);
-    }
-    if (i < n) {  // the last partial vector, through zero-padded planes
-      std::fill(hr + n, hr + i + N, std::uint16_t{0});
-      std::fill(hg + n, hg + i + N, std::uint16_t{0});
-      std::fill(hb + n, hb + i + N, std::uint16_t{0});
-      alignas(64) float fr[kChunk], fg[kChunk], fb[kChunk];
-      hn::Store(half(hr + i), df, fr), hn::Store(half(hg + i), df, fg), hn::Store(half(hb + i), df, fb);
-      for (std::size_t j = i; j < n; ++j) r[k0 + j] = fr[j - i], g[k0 + j] = fg[j - i], b[k0 + j] = fb[j - i];
+    const std::size_t padded = (n + N - 1) / N * N;  // <= kChunk, a multiple of N
+    for (auto& plane : planes) std::fill(plane + n, plane + padded, std::uint16_t{0});
+    for (int c = 0; c < 3; ++c) {
+      for (std::size_t i = 0; i < padded; i += N) hn::Store(half_to_float(df, hn::Load(du16, planes[c] + i)), df, floats[c] + i);
+      std::memcpy(out[c] + k0, floats[c], n * sizeof(float));
     }
   }
 }
