@@ -7,10 +7,26 @@
 //     connection opening or of its previous reply (idle keep-alive connections included);
 //   - a body rate: after body_grace_s, at least min_body_bytes_per_s on average;
 //   - connection caps, per peer (uid on the Unix socket, address on TCP) and in total.
-//     A new connection over a cap closes the oldest connection of that peer (or any
-//     peer) that is only waiting for a request header: the newest client wins against
-//     ones that are not asking anything. Connections with a request in progress are never
-//     closed for room; when every one is, the new connection is answered 503.
+//
+// Making room for a new connection over a cap (issue 28: 40 clients, one connection each,
+// lost 12-27 of 2400 requests below the per-peer cap of 64):
+//   1. Connections their clients have closed stop counting: MHD reports a close only when
+//      its thread gets to that socket, and until then a new connection of the same client
+//      (often on another MHD thread) found the dead one counted. They are found by polling
+//      (POLLHUP; or POLLRDHUP with nothing left to read and no request in progress).
+//   2. Then the oldest connection that is only waiting for a request header makes room,
+//      unless its socket holds unread bytes: a connection whose request has arrived but
+//      MHD has not read it yet (a busy machine) carries a request and is never closed for
+//      room. The one closed is answered 503 server.busy (Retry-After) and half-closed:
+//      a client that writes its request just then (a fresh connection, a keep-alive one
+//      being reused) still sends it and reads the 503, not a broken pipe; its read side
+//      is shut kClosedForRoomReadS later. MHD reading such a request is told to drop it
+//      (closed_by_us).
+//   3. Else the new connection is refused: its request is answered 503 server.busy with
+//      Retry-After (HttpServer), and it does not count.
+// The header deadline likewise spares a connection with unread bytes: then the server is
+// behind, not the client. Connections with a request in progress are never closed for
+// room.
 // Closing is shutdown(2) on the socket under the table's lock, so the fd cannot have been
 // reused: MHD reports a connection closed (NOTIFY_CLOSED) before it closes its socket.
 #pragma once
@@ -41,6 +57,7 @@ struct ConnectionStats {
   std::uint64_t header_timeouts = 0;  // closed for a request header that did not arrive in time
   std::uint64_t body_timeouts = 0;    // closed for a body slower than the minimum rate
   std::uint64_t refused = 0;          // answered 503 because every connection was busy
+  std::uint64_t hung_up = 0;          // closed by their clients, found while making room
 };
 
 class ConnectionTable {
@@ -64,6 +81,9 @@ class ConnectionTable {
   // The reply was sent: the connection waits for its next request.
   void idle(Key c, Clock::time_point now);
   bool refused(Key c) const;
+  // Closed for room or a deadline: a request MHD reads from it anyway is dropped (it was
+  // answered already, or it is too late).
+  bool closed_by_us(Key c) const;
 
   // Closes every connection past its header deadline or below the body rate. A request
   // that was started (request line seen) gets a 408 JSON reply first; an idle keep-alive
@@ -82,13 +102,20 @@ class ConnectionTable {
     Clock::time_point since;
     bool started = false;      // the request line arrived
     bool closing = false;      // shut down by us; MHD will report it closed
+    bool half_closed = false;  // closed for room: the read side stays open a while (since = then)
     bool refused = false;
     std::uint64_t body_received = 0;
   };
-  // The oldest connection waiting for a header (of `peer`, or of anyone when empty).
-  Entry* oldest_waiting(const std::string& peer, Key except);
+  // Under mu_. Room under the cap of `peer` (the total cap when empty) for one more
+  // connection, made as the header comment says; false when there is none.
+  bool make_room(const std::string& peer, Key except, Clock::time_point now);
+  int counted(const std::string& peer) const;
+  // Closes the counted connections of `peer` (anyone's when empty) whose clients are gone.
+  void close_hung_up(const std::string& peer, Key except);
+  // The oldest connection of `peer` (anyone's when empty) that may be closed for room.
+  Entry* oldest_evictable(const std::string& peer, Key except);
   enum class Notice { none, evicted, header_timeout, body_timeout };
-  void close_entry(Entry& e, Notice notice);
+  void close_entry(Entry& e, Notice notice, Clock::time_point now);
 
   ConnectionLimits limits_;
   mutable std::mutex mu_;
@@ -99,8 +126,8 @@ class ConnectionTable {
 };
 
 // Writes a complete HTTP/1.1 error reply (the wire table's status and JSON body,
-// Connection: close) straight to a socket, without blocking: for connections the HTTP
-// library is not answering itself.
-void send_raw_error(int fd, const Error& error);
+// Connection: close, Retry-After when positive) straight to a socket, without blocking:
+// for connections the HTTP library is not answering itself.
+void send_raw_error(int fd, const Error& error, int retry_after_s = 0);
 
 }  // namespace hdrd::daemon

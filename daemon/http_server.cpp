@@ -59,9 +59,12 @@ std::optional<unsigned long long> declared_length(const HttpRequest& req) {
   return n;
 }
 
+// The connection was refused for room: answered, then closed (it does not count, and the
+// client's next connection may find room).
 Reply busy_reply() {
   Reply busy = Reply::error(make_error("server.busy", "every connection is busy with a request; retry later"));
   busy.headers.emplace_back("Retry-After", "1");
+  busy.headers.emplace_back("Connection", "close");
   return busy;
 }
 
@@ -354,6 +357,8 @@ int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
 int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method,
                               RequestContext& ctx) {
   ++open_requests_;
+  // Closed for room after MHD had read this request: it was answered 503 then.
+  if (connections_.closed_by_us(c)) return MHD_NO;
   auto& req = ctx.req;
   req.id = next_id_++;
   req.method = method ? method : "";

@@ -94,6 +94,7 @@ void add_resource_gauges(std::map<std::string, double>& gauges, const Scheduler*
     gauges["hdrd_connections_header_timeouts"] = double(c.header_timeouts);
     gauges["hdrd_connections_body_timeouts"] = double(c.body_timeouts);
     gauges["hdrd_connections_refused"] = double(c.refused);
+    gauges["hdrd_connections_hung_up"] = double(c.hung_up);
   }
 }
 

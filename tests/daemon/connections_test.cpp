@@ -66,8 +66,9 @@ TEST(Connections, ANewConnectionOverThePeerCapClosesThatPeersOldestIdleOne) {
   EXPECT_TRUE(t.opened(other.key(), other.server, "uid:2", t0));
   EXPECT_TRUE(t.opened(b.key(), b.server, "uid:1", t0 + 1s));
   EXPECT_TRUE(t.opened(c.key(), c.server, "uid:1", t0 + 2s));
-  EXPECT_TRUE(a.received().second) << "the oldest idle connection of uid:1 made room";
-  EXPECT_EQ(a.received().first, "") << "an idle connection is closed silently";
+  auto [text, closed] = a.received();
+  EXPECT_TRUE(closed) << "the oldest idle connection of uid:1 made room";
+  EXPECT_EQ(error_code_of(text), "server.busy") << "told why, in case its client was just writing a request";
   EXPECT_FALSE(b.received().second);
   EXPECT_FALSE(other.received().second) << "another peer's connection is not touched";
   EXPECT_EQ(t.stats().evicted, 1u);
@@ -178,6 +179,79 @@ TEST(Connections, RefusedConnectionsGetAShortDeadlineAndDoNotCount) {
   t.closed(b.key());
   t.closed(a.key());
   EXPECT_EQ(t.stats().open, 0);
+}
+
+bool send_request(int fd) {
+  const std::string r = "GET /v1/status HTTP/1.1\r\nHost: x\r\n\r\n";
+  return ::send(fd, r.data(), r.size(), MSG_NOSIGNAL) == ssize_t(r.size());
+}
+
+// Issue 28 item 4. A client that closed its connection stops counting as soon as room is
+// needed, without waiting for MHD to report the close; the connection beside it, whose
+// request MHD has not read yet, is not closed to make that room.
+TEST(Connections, AConnectionItsClientClosedStopsCountingAtOnce) {
+  ConnectionTable t(limits(10, 2));
+  Pair gone, waiting, fresh;
+  const auto t0 = Clock::now();
+  t.opened(gone.key(), gone.server, "uid:1", t0);
+  t.header_complete(gone.key(), t0);
+  t.busy(gone.key());  // its reply went out; MHD has not got round to the close yet
+  ::close(gone.client);
+  gone.client = -1;
+  t.opened(waiting.key(), waiting.server, "uid:1", t0 + 2s);
+  ASSERT_TRUE(send_request(waiting.client));
+  EXPECT_TRUE(t.opened(fresh.key(), fresh.server, "uid:1", t0 + 4s));
+  EXPECT_FALSE(waiting.received().second) << "a connection carrying a request is not closed for room";
+  EXPECT_EQ(t.stats().hung_up, 1u);
+  EXPECT_EQ(t.stats().evicted, 0u);
+  EXPECT_EQ(t.stats().open, 2);
+}
+
+TEST(Connections, AConnectionWithAnUnreadRequestIsNeverClosedForRoom) {
+  ConnectionTable t(limits(10, 1));
+  Pair a, b;
+  const auto t0 = Clock::now();
+  t.opened(a.key(), a.server, "uid:1", t0);
+  ASSERT_TRUE(send_request(a.client));  // MHD is behind
+  EXPECT_FALSE(t.opened(b.key(), b.server, "uid:1", t0 + 5s)) << "refused (503), not made room for";
+  EXPECT_FALSE(a.received().second);
+  EXPECT_EQ(t.stats().refused, 1u);
+  EXPECT_EQ(t.stats().evicted, 0u);
+}
+
+// A client writes its request right after connect(), or reuses an idle keep-alive
+// connection: closed for room just then, it can still send its request, and reads a 503.
+TEST(Connections, AConnectionClosedForRoomIsAnswered503AndCanStillBeWrittenTo) {
+  ConnectionTable t(limits(10, 1));
+  Pair a, b;
+  const auto t0 = Clock::now();
+  t.opened(a.key(), a.server, "uid:1", t0);
+  EXPECT_TRUE(t.opened(b.key(), b.server, "uid:1", t0));
+  EXPECT_TRUE(t.closed_by_us(a.key()));
+  EXPECT_TRUE(send_request(a.client)) << "the request still goes out (no EPIPE)";
+  auto [text, closed] = a.received();
+  EXPECT_TRUE(closed);
+  EXPECT_NE(text.find("HTTP/1.1 503"), std::string::npos) << text;
+  EXPECT_NE(text.find("Retry-After: 1"), std::string::npos) << text;
+  EXPECT_EQ(error_code_of(text), "server.busy");
+  // The read side closes too, a little later.
+  t.enforce(t0 + 3s);
+  EXPECT_FALSE(send_request(a.client)) << "shut for reading: a later write fails";
+}
+
+// The header deadline is the client's: when its request sits unread in the socket, the
+// server is behind, and the request is answered rather than closed as late.
+TEST(Connections, TheHeaderDeadlineSparesARequestTheServerHasNotRead) {
+  ConnectionTable t(limits(10, 10));
+  Pair sent, silent;
+  const auto t0 = Clock::now();
+  t.opened(sent.key(), sent.server, "uid:1", t0);
+  t.opened(silent.key(), silent.server, "uid:1", t0);
+  ASSERT_TRUE(send_request(sent.client));
+  t.enforce(t0 + 11s);
+  EXPECT_FALSE(sent.received().second);
+  EXPECT_TRUE(silent.received().second);
+  EXPECT_EQ(t.stats().header_timeouts, 1u);
 }
 
 }  // namespace
