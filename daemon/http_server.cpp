@@ -44,19 +44,58 @@ namespace {
 
 struct ConnectionInfo {
   std::optional<PeerCred> peer;
+  // The current request's target as the client sent it (MHD's URI callback, before it
+  // percent-decodes the path in place), and where it starts in MHD's read buffer.
+  std::string raw_target;
+  const char* raw_target_at = nullptr;
 };
 
 // Oversized bodies up to this much beyond the limit are read and dropped before the 413.
 constexpr unsigned long long kDrainLimitBytes = 16ull << 20;
 
-// The request's Content-Length when it is a plain decimal number.
+// The request's Content-Length when it is one plain decimal number (RFC 9110 §8.6:
+// 1*DIGIT). Repeated fields arrive joined by ", " (collect_header), so they are not.
 std::optional<unsigned long long> declared_length(const HttpRequest& req) {
   const auto* cl = req.header("content-length");
-  if (!cl) return std::nullopt;
-  char* end = nullptr;
-  const unsigned long long n = std::strtoull(cl->c_str(), &end, 10);
-  if (!end || *end != '\0') return std::nullopt;
+  if (!cl || cl->empty() || cl->size() > 19) return std::nullopt;
+  unsigned long long n = 0;
+  for (char ch : *cl) {
+    if (ch < '0' || ch > '9') return std::nullopt;
+    n = n * 10 + unsigned(ch - '0');
+  }
   return n;
+}
+
+// A request whose framing is in doubt is answered and its connection closed: the rest of
+// what the client sent cannot be trusted to start a request (RFC 9112 §6.3 item 5).
+Reply bad_framing(Error e) {
+  Reply r = Reply::error(std::move(e));
+  r.headers.emplace_back("Connection", "close");
+  return r;
+}
+
+// The framing and the target, before anything else looks at the request.
+// - Content-Length must be a single decimal number. Two fields are refused even when they
+//   agree (RFC 9110 §8.6 allows either): libmicrohttpd frames the body by the first, a
+//   proxy in front may frame it by another, and no client needs to send two.
+// - The target holds no control byte, raw or percent-encoded (check_request_target). A raw
+//   NUL hides the rest of the target from the URI callback too ("GET /v1/status\0x"): MHD
+//   cuts the request line into C strings in its read buffer, so the version starts right
+//   after the target's last byte; when the target seen is shorter than that span, the
+//   request line held a NUL.
+std::optional<Reply> refuse_malformed(const HttpRequest& req, const ConnectionInfo* info, const char* version) {
+  if (req.header("content-length") && !declared_length(req))
+    return bad_framing(make_error("request.content_length",
+                                  fmt::format("Content-Length must be one decimal number; got '{}'",
+                                              req.header("content-length")->substr(0, 64)), "content-length"));
+  if (!info) return std::nullopt;
+  if (auto t = check_request_target(info->raw_target); !t) return bad_framing(t.error());
+  if (info->raw_target_at && version && *version && version > info->raw_target_at &&
+      std::size_t(version - info->raw_target_at) < (std::size_t(1) << 20) &&
+      std::size_t(version - info->raw_target_at) - 1 > info->raw_target.size())
+    return bad_framing(make_error("request.target", fmt::format("the request target holds control byte 0x00 at "
+                                                                "offset {}", info->raw_target.size())));
+  return std::nullopt;
 }
 
 // The connection was refused for room: answered, then closed (it does not count, and the
@@ -212,14 +251,20 @@ void Responder::abort(const Error& why) {
 // ---- HttpServer ---------------------------------------------------------------------
 
 struct HttpServer::Callbacks {
-  static MHD_Result access(void* cls, MHD_Connection* c, const char* url, const char* method, const char*,
+  static MHD_Result access(void* cls, MHD_Connection* c, const char* url, const char* method, const char* version,
                            const char* upload_data, size_t* upload_data_size, void** con_cls) {
     auto& inst = *static_cast<Instance*>(cls);
-    return inst.server->on_access(inst, c, url, method, upload_data, upload_data_size, con_cls) ? MHD_YES : MHD_NO;
+    return inst.server->on_access(inst, c, url, method, version, upload_data, upload_data_size, con_cls) ? MHD_YES
+                                                                                                         : MHD_NO;
   }
-  // Called when the request line has arrived; its return value is MHD's initial con_cls,
-  // which must stay null (on_access takes null for "first call").
-  static void* uri_logged(void* cls, const char*, MHD_Connection* c) {
+  // Called when the request line has arrived, with the target as sent; its return value is
+  // MHD's initial con_cls, which must stay null (on_access takes null for "first call").
+  static void* uri_logged(void* cls, const char* uri, MHD_Connection* c) {
+    if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT))
+      if (auto* info = static_cast<ConnectionInfo*>(ci->socket_context)) {
+        info->raw_target = uri ? uri : "";
+        info->raw_target_at = uri;
+      }
     static_cast<Instance*>(cls)->server->connections_.request_line(c);
     return nullptr;
   }
@@ -355,7 +400,7 @@ int HttpServer::queue(MHD_Connection* c, RequestContext& ctx, const Reply& r) {
 
 // First call for a request: headers only. Decides the body limit (or answers at once).
 int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method,
-                              RequestContext& ctx) {
+                              const char* version, RequestContext& ctx) {
   ++open_requests_;
   // Closed for room after MHD had read this request: it was answered 503 then.
   if (connections_.closed_by_us(c)) return MHD_NO;
@@ -367,9 +412,12 @@ int HttpServer::begin_request(Instance& inst, MHD_Connection* c, const char* url
   req.started = std::chrono::steady_clock::now();
   MHD_get_connection_values(c, MHD_HEADER_KIND, &collect_header, &req.headers);
   MHD_get_connection_values_n(c, MHD_GET_ARGUMENT_KIND, &collect_query, &req.query);
+  const ConnectionInfo* info = nullptr;
   if (const auto* ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT))
-    if (ci->socket_context) req.peer = static_cast<ConnectionInfo*>(ci->socket_context)->peer;
+    info = static_cast<const ConnectionInfo*>(ci->socket_context);
+  if (info) req.peer = info->peer;
   connections_.header_complete(c, req.started);
+  if (auto bad = refuse_malformed(req, info, version)) return queue(c, ctx, *bad);
   if (connections_.refused(c)) {
     // Like an oversized body below: a body of modest size is read and dropped first, so
     // that a client which sends before it reads sees the 503, not a broken pipe.
@@ -481,13 +529,13 @@ int HttpServer::dispatch(MHD_Connection* c, RequestContext& ctx) {
   return MHD_YES;
 }
 
-int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method,
+int HttpServer::on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* version,
                           const char* upload_data, std::size_t* upload_data_size, void** con_cls) {
   auto* ctx = static_cast<RequestContext*>(*con_cls);
   if (!ctx) {
     ctx = new RequestContext;
     *con_cls = ctx;
-    return begin_request(inst, c, url, method, *ctx);
+    return begin_request(inst, c, url, method, version, *ctx);
   }
   if (*upload_data_size > 0) {
     collect_body(c, *ctx, upload_data, *upload_data_size);

@@ -130,9 +130,10 @@ class HttpServer {
   struct RequestContext;
   struct Callbacks;  // the C callbacks MHD calls
   friend struct Callbacks;
-  int on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* upload_data,
-                std::size_t* upload_data_size, void** con_cls);
-  int begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method, RequestContext& ctx);
+  int on_access(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* version,
+                const char* upload_data, std::size_t* upload_data_size, void** con_cls);
+  int begin_request(Instance& inst, MHD_Connection* c, const char* url, const char* method, const char* version,
+                    RequestContext& ctx);
   void collect_body(MHD_Connection* c, RequestContext& ctx, const char* data, std::size_t size);
   std::optional<Reply> refuse_early(MHD_Connection* c, const HttpRequest& req);
   std::optional<Reply> split_multipart(MHD_Connection* c, RequestContext& ctx);

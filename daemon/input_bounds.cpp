@@ -31,9 +31,35 @@ Result<void> check_query(const std::vector<std::pair<std::string, std::string>>&
       if (s->find('\0') != std::string::npos)
         return make_error("request.query", fmt::format("query parameter '{}': {} holds a NUL byte (%00)", name, part),
                           name);
+      for (unsigned char b : *s)
+        if (b < 0x20 || b == 0x7f)
+          return make_error("request.query", fmt::format("query parameter '{}': {} holds control byte 0x{:02x}", name,
+                                                         part, b), name);
       if (!io::is_valid_utf8(*s))
         return make_error("request.query", fmt::format("query parameter '{}': {} is not valid UTF-8 once "
                                                        "percent-decoded", name, part), name);
+    }
+  }
+  return {};
+}
+
+Result<void> check_request_target(std::string_view raw) {
+  const auto hex = [](char c) {
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+  };
+  const auto control = [](unsigned b) { return b < 0x20 || b == 0x7f; };
+  bool in_query = false;
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const unsigned b = static_cast<unsigned char>(raw[i]);
+    in_query = in_query || b == '?';
+    if (control(b))
+      return make_error("request.target", fmt::format("the request target holds control byte 0x{:02x} at offset {}", b, i));
+    // Percent-encoded ones in the path; the query's are check_query's, which names the parameter.
+    if (b == '%' && i + 2 < raw.size() && !in_query) {
+      const int hi = hex(raw[i + 1]), lo = hex(raw[i + 2]);
+      if (hi >= 0 && lo >= 0 && control(unsigned(hi * 16 + lo)))
+        return make_error("request.target", fmt::format("the request target holds control byte 0x{:02x} "
+                                                        "(percent-encoded) at offset {}", hi * 16 + lo, i));
     }
   }
   return {};

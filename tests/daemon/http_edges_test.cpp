@@ -1,6 +1,6 @@
 // Issue 28's HTTP items on the real `hdrd serve`, with raw requests over the Unix socket:
 // no complete request is dropped without an answer (many short connections under the
-// default caps). The oracle is the HTTP contract: every request that was
+// default caps), and the framing and target rules (RFC 9112 §6.3, RFC 3986 §2). The oracle is the HTTP contract: every request that was
 // sent whole gets a complete reply (status line, Content-Length, body) before its
 // connection closes.
 #include <gtest/gtest.h>
@@ -129,6 +129,55 @@ TEST(DaemonHttpEdges, AHundredClientsOverThePeerCapAreAllAnswered) {
   EXPECT_EQ(t.ok.load() + t.busy.load(), 2400);
   EXPECT_GT(t.ok.load(), 1200) << "most requests are served";
   EXPECT_TRUE(d.alive());
+}
+
+// Item 5: two Content-Length fields were accepted (the first one framed the body).
+TEST(DaemonHttpEdges, MoreThanOneContentLengthIsA400AndTheConnectionCloses) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  for (const char* lengths : {"Content-Length: 2\r\nContent-Length: 40\r\n", "Content-Length: 2\r\nContent-Length: 2\r\n",
+                              "Content-Length: 2, 2\r\n"}) {
+    RawConnection c(d.socket());
+    ASSERT_TRUE(c.send(fmt::format("POST /v1/render HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n{}\r\n{{}}"
+                                   "GET /v1/status HTTP/1.1\r\nHost: x\r\n\r\n", lengths)));
+    auto [text, closed] = c.read_until_closed(std::chrono::seconds(10));
+    EXPECT_EQ(text.rfind("HTTP/1.1 400", 0), 0u) << lengths << text.substr(0, 300);
+    // A list in one field never reaches hdrd: libmicrohttpd answers it 400 itself (its HTML).
+    if (std::string(lengths).find(',') == std::string::npos) {
+      EXPECT_EQ(error_code(text.substr(text.find("\r\n\r\n") + 4)), "request.content_length") << lengths;
+    }
+    EXPECT_TRUE(closed) << "the connection closes after a framing error";
+    EXPECT_EQ(text.find("HTTP/1.1 200"), std::string::npos) << "nothing after the bad request is served";
+  }
+}
+
+// Item 5: a NUL in the target cut the path (DELETE /v1/jobs/ID%00/result deleted the job);
+// every control byte, raw or percent-encoded, is a 400 before routing.
+TEST(DaemonHttpEdges, AControlByteInTheTargetIsA400NeverATruncation) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  const std::string targets[] = {
+      "/v1/status%00x",        "/v1/status%00",       "/v1/jobs/j1%00/result", "/v1/status%0a",
+      "/v1/status%0D%0Ax",     "/v1/status%1b[31m",   "/v1/status%7f",         "/v1/status?x=\x01",
+      std::string("/v1/status\0x", 12), "/v1/status\x1b[2J", "/v1/status\x7f",
+  };
+  for (const std::string& target : targets) {
+    for (const char* method : {"GET", "DELETE"}) {
+      const Exchange x = http_exchange(d.socket(), fmt::format("{} {} HTTP/1.1\r\nHost: x\r\n\r\n", method, target));
+      ASSERT_TRUE(x.complete) << method << " " << target;
+      EXPECT_EQ(x.status, 400) << method << " " << target << ": " << x.body;
+      EXPECT_EQ(error_code(x.body), "request.target") << method << " " << target;
+    }
+  }
+  // In the query, percent-encoded: request.query, naming the parameter.
+  for (const char* target : {"/v1/status?x=%01", "/v1/status?mode=hdr10%0a", "/v1/status?a%1b=1"}) {
+    const Exchange x = http_exchange(d.socket(), fmt::format("GET {} HTTP/1.1\r\nHost: x\r\n\r\n", target));
+    EXPECT_EQ(x.status, 400) << target;
+    EXPECT_EQ(error_code(x.body), "request.query") << target;
+  }
+  // Plain targets, percent-encoded printable bytes and queries still work.
+  for (const char* target : {"/v1/status", "/v1/%73tatus", "/v1/status?x=%41"})
+    EXPECT_EQ(http_exchange(d.socket(), fmt::format("GET {} HTTP/1.1\r\nHost: x\r\n\r\n", target)).status, 200) << target;
 }
 
 }  // namespace
