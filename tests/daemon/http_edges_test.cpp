@@ -1,6 +1,7 @@
 // Issue 28's HTTP items on the real `hdrd serve`, with raw requests over the Unix socket:
 // no complete request is dropped without an answer (many short connections under the
-// default caps), and the framing and target rules (RFC 9112 §6.3, RFC 3986 §2). The oracle is the HTTP contract: every request that was
+// default caps), the framing and target rules (RFC 9112 §6.3, RFC 3986 §2), and the log
+// escaping of what clients send. The oracle is the HTTP contract: every request that was
 // sent whole gets a complete reply (status line, Content-Length, body) before its
 // connection closes.
 #include <gtest/gtest.h>
@@ -178,6 +179,29 @@ TEST(DaemonHttpEdges, AControlByteInTheTargetIsA400NeverATruncation) {
   // Plain targets, percent-encoded printable bytes and queries still work.
   for (const char* target : {"/v1/status", "/v1/%73tatus", "/v1/status?x=%41"})
     EXPECT_EQ(http_exchange(d.socket(), fmt::format("GET {} HTTP/1.1\r\nHost: x\r\n\r\n", target)).status, 200) << target;
+}
+
+// Item 6: %0a, %0d, %1b and raw ESC in the path reached the access log raw (a forged line,
+// terminal escapes). Every log line is escaped; the log holds no control byte but its
+// line ends.
+TEST(DaemonHttpEdges, WhatClientsSendReachesTheLogEscaped) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  const std::string forged = "2026-01-01T00:00:00.000 info #999 forged";
+  for (const std::string& target : {"/v1/x%0a" + forged + "%1b[31m", "/v1/x%0d%0a" + forged, std::string("/v1/x\x1b[2J")}) {
+    std::string t = target;
+    for (std::size_t p; (p = t.find(' ')) != std::string::npos;) t.replace(p, 1, "%20");
+    EXPECT_TRUE(http_exchange(d.socket(), fmt::format("GET {} HTTP/1.1\r\nHost: x\r\n\r\n", t)).complete) << t;
+  }
+  EXPECT_TRUE(http_exchange(d.socket(), "GET /v1/status HTTP/1.1\r\nHost: x\r\nX-End: 1\r\n\r\n").complete);
+  const std::string log = d.log();
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const unsigned char b = static_cast<unsigned char>(log[i]);
+    ASSERT_FALSE((b < 0x20 && b != '\n') || b == 0x7f) << fmt::format("control byte 0x{:02x} at {}: ", b, i)
+                                                        << log.substr(i > 80 ? i - 80 : 0, 160);
+  }
+  EXPECT_EQ(log.find("\n" + forged), std::string::npos) << "a forged line starts a line:\n" << log;
+  EXPECT_NE(log.find("/v1/x\\n2026-01-01"), std::string::npos) << "the request is logged, escaped:\n" << log;
 }
 
 }  // namespace

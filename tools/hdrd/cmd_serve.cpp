@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "daemon/config.hpp"
+#include "daemon/log_escape.hpp"
 #include "daemon/service.hpp"
 #include "tools/hdrd/command.hpp"
 
@@ -109,7 +110,8 @@ void notify_systemd(const char* state) {
 void run(const ServeOptions& o) {
   auto logger = spdlog::stderr_color_mt("hdrd");
   spdlog::set_default_logger(logger);
-  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
+  // Every message is escaped (daemon/log_escape.hpp): much of what is logged comes from clients.
+  daemon::set_escaped_log_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
   Config config = load(o);
   if (o.print_config) {
     print_out(daemon::config_json(config).dump(2));
