@@ -14,13 +14,23 @@
 #       (a PNG declaring 16384 x 8192, random bytes at the size limit, a body over it),
 #       invalid UTF-8 and NUL in query parameters, symbolic and hard links in the asset
 #       root to files that are not EDIDs, a chunk-extension bomb, NUL bytes in bodies,
-#       and large frames near the memory budget;
+#       and large frames near the memory budget; and issue 28's: many short connections
+#       (40 and 100 clients of one uid, one connection each at a time: every request must
+#       get a whole reply), file swaps during jobs (an EXR sequence's last frame replaced
+#       after the 202 by a symlink or a hard link to a file outside the asset root, or by a
+#       FIFO: the job must not read outside the root, nor hang), name collisions (a job
+#       named x.00001 beside a sequence x: x's files must stay), and crash and restart (a
+#       second daemon killed with -9 mid-sequence and restarted: no final-named file of
+#       the unfinished sequence may stay);
 #     - a probe opens a new connection every 250 ms and times GET /v1/status;
 #     - the daemon's RSS is sampled every 100 ms.
 #  3. the load stops; after 5 s the RSS is read again.
 # Checks: no crash (alive, exit 0 on SIGTERM), no 5xx for a client's fault, every probe
 # answered and the worst under 1 s, RSS peak within warm-up + the memory budget, RSS
-# after within 20 % of the warm-up, every valid answer correct, no partial dump file.
+# after within 20 % of the warm-up, every valid answer correct, no partial dump file,
+# no dropped request (a connection closed without a reply to a request sent whole: the
+# short-connection rounds, and the clients' retries on fresh connections), and no
+# FAILED outcome in the issue 28 classes (the summary's "abuse" lists each outcome).
 #
 # Usage: scripts/soak.sh [-t SECONDS] [-c CLIENTS] [-w WARMUP] [-m BUDGET_MIB] [-b BUILD_DIR]
 set -euo pipefail
@@ -38,7 +48,7 @@ while getopts "t:c:w:m:b:h" opt; do
     w) warmup=$OPTARG ;;
     m) budget_mib=$OPTARG ;;
     b) build_dir=$OPTARG ;;
-    *) sed -n '2,25p' "$0"; exit 2 ;;
+    *) sed -n '2,37p' "$0"; exit 2 ;;
   esac
 done
 
@@ -85,10 +95,11 @@ EOF
 daemon_pid=$!
 
 set +e
-python3 - "$work" "$daemon_pid" "$seconds" "$clients" "$warmup" "$budget_mib" <<'PY'
-import base64, http.client, json, os, random, re, resource, socket, statistics, struct, sys, threading, time
+python3 - "$work" "$daemon_pid" "$seconds" "$clients" "$warmup" "$budget_mib" "$hdrd" <<'PY'
+import base64, http.client, json, os, random, re, resource, shutil, signal, socket, statistics, struct, subprocess, sys, threading, time
 
 work, pid, seconds, clients, warmup, budget_mib = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
+hdrd_bin = os.path.abspath(sys.argv[7])
 sock_path = os.path.join(work, "hdrd.sock")
 soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
 resource.setrlimit(resource.RLIMIT_NOFILE, (hard, hard))
@@ -103,6 +114,9 @@ class UnixConnection(http.client.HTTPConnection):
         s.connect(sock_path)
         self.sock = s
 
+def _connect_to(c, path, timeout):
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(timeout); s.connect(path); c.sock = s
+
 def rss_kib():
     try:
         with open(f"/proc/{pid}/status") as f:
@@ -113,8 +127,9 @@ def rss_kib():
         pass
     return -1
 
-def one(method, path, body=None, headers=None, timeout=180):
+def one(method, path, body=None, headers=None, timeout=180, sock=None):
     c = UnixConnection(timeout)
+    if sock: c.connect = lambda: _connect_to(c, sock, timeout)
     try:
         c.request(method, path, body=body, headers=headers or {})
         r = c.getresponse()
@@ -144,6 +159,8 @@ def exr_of(w, h):
     return data
 exr = exr_of(32, 18)
 big_exr = exr_of(1920, 1080)
+mid_exr = exr_of(960, 540)  # the frames of the file-swap and crash rounds
+with open(os.path.join(work, "outside.exr"), "wb") as f: f.write(mid_exr)  # outside the asset root
 
 def multipart(parts, boundary="hdrdSoakBoundary7"):
     out = b""
@@ -205,7 +222,7 @@ MALFORMED = [
 ]
 
 lock = threading.Lock()
-stats = {"ok": 0, "reconnects": 0, "retries_after_reconnect": 0, "malformed_sent": 0, "malformed_4xx": 0, "hangups": 0, "shed_503": 0, "errors": [],
+stats = {"ok": 0, "reconnects": 0, "retries_after_reconnect": 0, "short_requests": 0, "short_dropped": 0, "short_busy": 0, "malformed_sent": 0, "malformed_4xx": 0, "hangups": 0, "shed_503": 0, "errors": [],
          "abuse": {}, "client_fault_5xx": [], "probe": [], "probe_failures": 0, "rss_peak_kib": 0}
 def note_abuse(cls, outcome):
     with lock:
@@ -276,10 +293,9 @@ def worker(seed, limit=None):
             except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError):
                 # The daemon may close an idle keep-alive connection (header deadline, or to
                 # make room during a flood); clients retry once on a new one, as
-                # hdrd_client.py and daemon::Client do. During a flood from the same uid a
-                # new connection is itself closed for room if ~64 newer ones arrive before
-                # its request line (docs/performance-daemon.md): such a client tries again
-                # after a pause, up to three times; every retry is counted.
+                # hdrd_client.py and daemon::Client do. A fresh connection closed before
+                # its reply is a dropped request (retries_after_reconnect, which fails the
+                # soak); such a client tries again after a pause, up to three times.
                 for attempt in range(3):
                     conn.close(); conn = UnixConnection()
                     with lock: stats["reconnects"] += 1
@@ -373,8 +389,198 @@ def png_declaring(w, h):
     def chunk(t, d): return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
     return PNG_SIG + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)) + chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b"")
 
+# ---- issue 28 classes -------------------------------------------------------------------
+
+def short_exchange(sock=None):
+    """One GET /v1/status on a fresh connection, read by its Content-Length, then closed
+    (as curl does). Returns the status, or None when the connection closed first."""
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(30)
+    try:
+        s.connect(sock or sock_path)
+        s.sendall(b"GET /v1/status HTTP/1.1\r\nHost: x\r\n\r\n")
+        out = b""; want = None
+        while want is None or len(out) < want:
+            b = s.recv(65536)
+            if not b: return None
+            out += b
+            if want is None and b"\r\n\r\n" in out:
+                head = out.split(b"\r\n\r\n", 1)[0]
+                m = re.search(rb"Content-Length: (\d+)", head)
+                want = len(head) + 4 + (int(m.group(1)) if m else 0)
+        return int(out[9:12])
+    except OSError:
+        return None
+    finally: s.close()
+
+def short_connections(n_clients, per_client):
+    tally = {"dropped": 0, "busy": 0, "ok": 0, "other": 0}
+    def client():
+        for _ in range(per_client):
+            if phase["stop"]: return
+            st = short_exchange()
+            with lock:
+                tally["dropped" if st is None else "ok" if st == 200 else "busy" if st == 503 else "other"] += 1
+    ts = [threading.Thread(target=client) for _ in range(n_clients)]
+    for t in ts: t.start()
+    for t in ts: t.join()
+    with lock:
+        stats["short_requests"] += sum(tally.values()); stats["short_dropped"] += tally["dropped"]; stats["short_busy"] += tally["busy"]
+    cls = f"short connections ({n_clients} clients)"
+    note_abuse(cls, "FAILED: dropped requests" if tally["dropped"] else "every request answered")
+    if tally["other"]: note_abuse(cls, f"UNEXPECTED status ({tally['other']})")
+
+def post_json(path, body, sock=None):
+    st, _, b = one("POST", path, json.dumps(body), {"Content-Type": "application/json"}, timeout=30, sock=sock)
+    try: return st, json.loads(b)
+    except ValueError: return st, {}
+
+def job_state(job_id, sock=None):
+    st, _, b = one("GET", f"/v1/jobs/{job_id}", timeout=10, sock=sock)
+    return json.loads(b) if st == 200 else {"state": f"http {st}"}
+
+def wait_job(job_id, limit_s, sock=None, until=("done", "failed", "cancelled")):
+    end = time.time() + limit_s
+    while time.time() < end:
+        j = job_state(job_id, sock)
+        if j.get("state") in until: return j
+        time.sleep(0.05)
+    return None
+
+def make_frames(dirname, count):
+    d = os.path.join(work, "assets", dirname)
+    shutil.rmtree(d, ignore_errors=True); os.makedirs(d)
+    for i in range(1, count + 1):
+        with open(os.path.join(d, f"f.{i:05d}.exr"), "wb") as f: f.write(mid_exr)
+    return d
+
+swap_counter = [0]
+def file_swap(rng):
+    """An EXR sequence's last frame replaced after the 202. The outside file is a valid EXR
+    of the same size, so a job that reads it succeeds: done means it read outside the root."""
+    with lock: swap_counter[0] += 1; n = swap_counter[0]
+    kind = ("symlink", "fifo", "hard link")[n % 3]
+    cls = f"file swap during a job ({kind})"
+    frames = 24
+    d = make_frames(f"swap{n}", frames)
+    last = os.path.join(d, f"f.{frames:05d}.exr")
+    st, j = post_json("/v1/sequences", {"images": f"swap{n}/f.%05d.exr", "fps": 25, "display": {"mode": "hdr10"},
+                                         "formats": ["png"], "name": f"swap{n}"})
+    if st != 202:
+        note_abuse(cls, f"not admitted: {st} {j.get('error', {}).get('code', '')}"); shutil.rmtree(d, ignore_errors=True); return
+    os.unlink(last)
+    if kind == "symlink": os.symlink(os.path.join(work, "outside.exr"), last)
+    elif kind == "hard link": os.link(os.path.join(work, "outside.exr"), last)
+    else: os.mkfifo(last)
+    done = wait_job(j["id"], 30)
+    if done is None:
+        t0 = time.time()
+        try: st_del = one("DELETE", f"/v1/jobs/{j['id']}", timeout=10)[0]
+        except (OSError, http.client.HTTPException): st_del = "no answer in 10 s"
+        note_abuse(cls, f"FAILED: hung (DELETE: {st_del})")
+        if kind == "fifo":  # unblock the reader so the soak can go on
+            try:
+                fd = os.open(last, os.O_WRONLY | os.O_NONBLOCK); os.close(fd)
+            except OSError: pass
+        wait_job(j["id"], 60)
+    elif done["state"] == "done":
+        note_abuse(cls, "FAILED: read outside the root" if kind != "fifo" else "done (the FIFO was read?)")
+        one("DELETE", f"/v1/jobs/{j['id']}", timeout=30)
+    else:
+        err = done.get("error") or {}
+        note_abuse(cls, f"refused: job {done['state']} {err.get('code', '')}")
+    shutil.rmtree(d, ignore_errors=True)
+
+collision_counter = [0]
+def name_collision(rng):
+    """A job named x.00001 beside a finished sequence x: x's files must stay as they were."""
+    with lock: collision_counter[0] += 1; n = collision_counter[0]
+    cls = "name collision (x.00001 beside x)"
+    d = make_frames(f"clash{n}", 2)
+    name = f"clash{n}"
+    st, j = post_json("/v1/sequences", {"images": f"clash{n}/f.%05d.exr", "fps": 25, "display": {"mode": "hdr10"},
+                                         "formats": ["png"], "name": name})
+    if st != 202:
+        note_abuse(cls, f"not admitted: {st}"); shutil.rmtree(d, ignore_errors=True); return
+    done = wait_job(j["id"], 60)
+    if not done or done["state"] != "done":
+        note_abuse(cls, f"the first job did not finish: {done and done.get('state')}"); shutil.rmtree(d, ignore_errors=True); return
+    dumps = os.path.join(work, "dumps")
+    def owned():
+        return {f: open(os.path.join(dumps, f), "rb").read() for f in os.listdir(dumps)
+                if re.fullmatch(re.escape(name) + r"(\.\d{5})?\.(png|json)", f)}
+    before = owned()
+    outcomes = []
+    st2, j2 = post_json("/v1/sequences", {"images": f"clash{n}/f.%05d.exr", "frames": 1, "fps": 25,
+                                           "display": {"mode": "hdr10"}, "formats": ["png"], "name": f"{name}.00001"})
+    if st2 == 202:
+        wait_job(j2["id"], 60)
+        one("DELETE", f"/v1/jobs/{j2['id']}", timeout=30)
+        outcomes.append("sequence accepted")
+    else:
+        outcomes.append(f"sequence refused {st2} {j2.get('error', {}).get('code', '')}")
+    body, ct = multipart([("image", exr), ("request", json.dumps({"dump": True, "name": f"{name}.00001", "formats": ["png"]}).encode())])
+    st3, _, b3 = one("POST", "/v1/encode", body, {"Content-Type": ct, "Accept": "application/json"}, timeout=30)
+    outcomes.append("dump accepted" if st3 == 200 else f"dump refused {st3}")
+    after = owned()
+    state = job_state(j["id"]).get("state")
+    if any(after.get(f) != v for f, v in before.items()):
+        note_abuse(cls, f"FAILED: x's files changed or removed ({'; '.join(outcomes)}; x is {state})")
+    else:
+        note_abuse(cls, f"x's files intact ({'; '.join(outcomes)})")
+    one("DELETE", f"/v1/jobs/{j['id']}", timeout=30)
+    for f in os.listdir(dumps):
+        if f.startswith(name + "."): os.unlink(os.path.join(dumps, f))
+    shutil.rmtree(d, ignore_errors=True)
+
+crash_lock = threading.Lock()
+def crash_restart(rng):
+    """A second daemon (own socket and dump directory, the same asset root) killed with -9
+    in the middle of a sequence, then restarted: what final-named files of that sequence
+    (NAME.NNNNN.EXT, NAME.json, the video) are left once it is up again."""
+    cls = "crash and restart (kill -9 mid-sequence)"
+    with crash_lock:
+        base = os.path.join(work, "crash")
+        os.makedirs(os.path.join(base, "dumps"), exist_ok=True)
+        sock = os.path.join(base, "hdrd.sock")
+        with open(os.path.join(base, "hdrd.toml"), "w") as f:
+            f.write(f'[server]\nsocket_path = "{sock}"\n[paths]\nasset_root = "{work}/assets"\ndump_dir = "{base}/dumps"\n'
+                    '[log]\nlevel = "warn"\naccess_log = false\n')
+        def start():
+            p = subprocess.Popen([hdrd_bin, "serve", "--config", os.path.join(base, "hdrd.toml")],
+                                 stdout=open(os.path.join(base, "daemon.log"), "ab"), stderr=subprocess.STDOUT)
+            for _ in range(600):
+                if short_exchange(sock) == 200: return p
+                time.sleep(0.05)
+            p.kill(); p.wait(); return None
+        p = start()
+        if not p: note_abuse(cls, "FAILED: the second daemon did not come up"); return
+        d = make_frames("crashframes", 60)
+        name = f"crash{rng.randrange(1 << 30)}"
+        try:
+            st, j = post_json("/v1/sequences", {"images": "crashframes/f.%05d.exr", "fps": 25, "display": {"mode": "hdr10"},
+                                                 "formats": ["png", "exr"], "name": name}, sock=sock)
+            if st != 202:
+                note_abuse(cls, f"not admitted: {st}"); return
+            end = time.time() + 60
+            while time.time() < end and job_state(j["id"], sock).get("frames_done", 0) < 5: time.sleep(0.02)
+            p.send_signal(signal.SIGKILL); p.wait()
+            p = start()
+            if not p: note_abuse(cls, "FAILED: the daemon did not come back after kill -9"); return
+            left = [f for f in os.listdir(os.path.join(base, "dumps")) if f.startswith(name + ".")]
+            final = [f for f in left if ".tmp-" not in f]
+            with lock: stats.setdefault("crash_leftovers", []).append(len(final))
+            note_abuse(cls, f"FAILED: final-named files left after restart" if final else "nothing final-named left")
+            if len(left) > len(final): note_abuse(cls, "FAILED: temporary files left after restart")
+        finally:
+            if p:
+                p.terminate()
+                try: p.wait(30)
+                except subprocess.TimeoutExpired: p.kill(); p.wait(); note_abuse(cls, "FAILED: no exit within 30 s of SIGTERM")
+            shutil.rmtree(os.path.join(base, "dumps"), ignore_errors=True)
+            shutil.rmtree(d, ignore_errors=True)
+
 def abuse_round(rng, k):
-    cls = k % 14
+    cls = k % 18
     if cls == 0: slow("slow headers", True)
     elif cls == 1: slow("slow bodies", False)
     elif cls == 2: flood("connection flood")
@@ -425,6 +631,10 @@ def abuse_round(rng, k):
                 with lock: stats["errors"].append(f"large frame -> {st} {b[:120]!r}")
     elif cls == 13:
         st, _, b = one("GET", "/v1/status?x=%ff"); expect("invalid UTF-8 in a GET query", st, b, {400})
+    elif cls == 14: short_connections(40 if (k // 18) % 2 == 0 else 100, 25)
+    elif cls == 15: file_swap(rng)
+    elif cls == 16: name_collision(rng)
+    elif cls == 17: crash_restart(rng)
 
 def abuser(seed):
     rng = random.Random(seed); k = seed
@@ -486,6 +696,7 @@ dumps = os.path.join(work, "dumps")
 names = sorted(os.listdir(dumps))
 partial = []
 for n in names:
+    if re.fullmatch(r"(swap|clash)\d+.*", n): continue  # issue 28 rounds; their outcomes are in "abuse"
     m = re.fullmatch(r"soak-\d+\.(png|exr|raw|json)", n)
     if not m: partial.append(n); continue
     d = open(os.path.join(dumps, n), "rb").read()
@@ -503,6 +714,9 @@ summary = {
     "valid_ok": stats["ok"], "malformed_sent": stats["malformed_sent"], "malformed_4xx": stats["malformed_4xx"],
     "hangups": stats["hangups"], "shed_503": stats["shed_503"], "reconnects": stats["reconnects"], "retries_after_reconnect": stats["retries_after_reconnect"],
     "errors": len(stats["errors"]),
+    "dropped_requests": stats["short_dropped"] + stats["retries_after_reconnect"],
+    "short_connection_requests": stats["short_requests"], "short_connection_dropped": stats["short_dropped"],
+    "short_connection_503": stats["short_busy"], "crash_final_named_leftovers": stats.get("crash_leftovers", []),
     "client_fault_5xx": len(stats["client_fault_5xx"]), "abuse": stats["abuse"],
     "probes": len(probe), "probe_failures": stats["probe_failures"],
     "probe_median_ms": round(1e3 * statistics.median(probe), 1) if probe else None,
@@ -517,6 +731,8 @@ summary = {
 print(json.dumps(summary, indent=2))
 for e in (stats["errors"] + stats["client_fault_5xx"])[:30]: print("  problem:", e, file=sys.stderr)
 ok = (alive and not stats["errors"] and not stats["client_fault_5xx"] and not partial and probe and
+      summary["dropped_requests"] == 0 and
+      all(not k.startswith("FAILED") for d in stats["abuse"].values() for k in d) and
       stats["probe_failures"] == 0 and probe[-1] < 1.0 and
       stats["rss_peak_kib"] - rss_warm <= budget_kib and rss_after <= 1.2 * rss_warm and
       all(not k.startswith("UNEXPECTED") for d in stats["abuse"].values() for k in d))
