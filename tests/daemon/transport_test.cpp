@@ -117,7 +117,9 @@ TEST(WireError, StatusPerCode) {
       {"server.busy", 503},          {"queue.memory", 503},          {"request.memory", 400},
       {"request.depth", 400},
       // a missing FFmpeg on the daemon's machine is the daemon's fault; what a codec cannot do is the request's
-      {"video.libav", 500},          {"video.codec", 422}};
+      {"video.libav", 500},          {"video.codec", 422},
+      // issue 28: a malformed target or framing is the client's
+      {"request.target", 400},       {"request.content_length", 400}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);
@@ -184,6 +186,27 @@ TEST(InputBounds, InvalidUtf8AndNulAreRefusedInEveryQueryParameter) {
   EXPECT_EQ(check_query(many).error().code, "request.query");
   EXPECT_EQ(check_query({{"name", std::string(kMaxQueryBytes + 1, 'a')}}).error().code, "request.query");
   EXPECT_TRUE(check_query({{"name", "caf\xc3\xa9"}}).ok()) << "UTF-8 itself is fine";
+}
+
+// Issue 28 item 5: the target as sent. Raw control bytes anywhere; percent-encoded ones in
+// the path (the query's are check_query's, which names the parameter); the rest stays.
+TEST(InputBounds, ControlBytesInTheTargetAreRefused) {
+  for (const std::string& bad : {std::string("/v1/status\0x", 12), std::string("/v1/\x1b[2J"), std::string("/v1/\x7f"),
+                                std::string("/v1/a\tb"), std::string("/v1/status?x=\x01"), std::string("/v1/status%00x"),
+                                std::string("/v1/jobs/j1%00/result"), std::string("/v1/x%0a"), std::string("/v1/x%0D%0A"),
+                                std::string("/v1/x%1B"), std::string("/v1/x%7f"), std::string("/v1/x%1f")}) {
+    auto r = check_request_target(bad);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_EQ(r.error().code, "request.target");
+    EXPECT_EQ(http_status(r.error()), 400u);
+  }
+  for (const std::string good : {"/v1/status", "/v1/%73tatus", "/v1/x%20y", "/v1/x%7e", "/v1/x%80", "/v1/x%",
+                                 "/v1/x%0", "/v1/x%zz", "/v1/status?x=%01", "/v1/status?mode=hdr10%0a"})
+    EXPECT_TRUE(check_request_target(good).ok()) << good;
+  auto q = check_query({{"mode", "hdr10\n"}});
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().code, "request.query");
+  EXPECT_EQ(q.error().field, "mode");
 }
 
 // Every code the code base makes — make_error("...") anywhere, the request parser's
