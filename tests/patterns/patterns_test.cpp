@@ -12,6 +12,7 @@
 #include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 #include "patterns/patterns.hpp"
+#include "patterns/selftest.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace hdrd::patterns {
@@ -137,6 +138,27 @@ TEST(Clipping, DetailVanishesExactlyAtThePeak) {
       else EXPECT_LT(c, background) << squares[i];
     }
   }
+}
+
+// Issue 29 item 2: the selftest's peak check is "no code decodes above the peak", not
+// "no code above round(PQ(peak))": at 150 cd/m2 that nearest code, 562, decodes to
+// 150.09 cd/m2 (ST 2084 computed here) and must fail; 561 passes.
+TEST(SelftestPeak, NoCodeMayDecodeAboveThePeak) {
+  DisplayTarget t = default_target(Mode::hdr10);
+  t.peak_nits = 150;
+  auto frame = [&](int code) {
+    return frame_from_codes(std::vector<Code3>(4, Code3{code, code, code}), 2, 2, t, false).value();
+  };
+  auto pq_eotf = [](double e) {
+    const double m1 = 2610.0 / 16384, m2 = 2523.0 / 4096 * 128, c1 = 3424.0 / 4096, c2 = 2413.0 / 4096 * 32,
+                 c3 = 2392.0 / 4096 * 32;
+    const double p = std::pow(e, 1 / m2);
+    return 10000 * std::pow(std::max(p - c1, 0.0) / (c2 - c3 * p), 1 / m1);
+  };
+  ASSERT_GT(pq_eotf(562 / 1023.0), 150);
+  ASSERT_LE(pq_eotf(561 / 1023.0), 150);
+  EXPECT_FALSE(check_peak(frame(562), "ramp").passed);
+  EXPECT_TRUE(check_peak(frame(561), "ramp").passed);
 }
 
 TEST(NearBlack, StepsAreDistinctCodesInPq) {
