@@ -135,6 +135,11 @@ Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, co
 
 // Per-mode defaults (REFERENCE.md §1.8): resolve_target with nothing said.
 DisplayTarget default_target(Mode m);
+// The one rule for a peak below paper white, said to the user: the default paper white
+// follows a lower peak (a note saying so), an asked-for one above the peak is clipped there
+// (a note saying so); nullopt otherwise. paper_white_asked: the request or the display
+// profile set it.
+std::optional<std::string> paper_white_note(const DisplayTarget& t, bool paper_white_asked);
 
 // Checks levels for sanity (finite, positive, black < peak, paper white <= 10000, bits valid
 // for the mode). Returns the first problem, naming the field.

@@ -41,6 +41,10 @@ Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::st
     e.code = profile ? "display.invalid" : "request.value";
     return e;
   }
+  const bool paper_white_asked =
+      r.has("display.paper_white_nits") || (profile && display::profile_levels(*profile).paper_white_nits);
+  if (auto note = paper_white_note(*t, paper_white_asked); note && warnings && !mode_info(mode).sdr())
+    warnings->push_back(*note);
   if (mode_info(mode).sdr() && r.has("display.paper_white_nits") && t->paper_white_nits != t->peak_nits && warnings)
     warnings->push_back(fmt::format("SDR paper white {} cd/m2 differs from the peak {} cd/m2", t->paper_white_nits,
                                     t->peak_nits));

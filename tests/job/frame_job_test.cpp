@@ -214,6 +214,45 @@ TEST(FrameJob, GainMapPrimaryIsTheSdrRequestsFrame) {
   EXPECT_EQ(sidecar["files"]["avif"], "hdr.avif");
 }
 
+// Issue 29 item 7: one rule for a peak below paper white, the same in every output. The
+// default paper white follows the peak (a warning says so) and every output is written,
+// the gain-map JPEG included (it refused these settings); one asked for above the peak is
+// kept, with a warning that it is clipped.
+TEST(FrameJob, PaperWhiteFollowsALowerPeakInEveryOutput) {
+  Inputs in;
+  auto run = [&](const char* body) {
+    auto r = parse_request_json(json::parse(body), cli_context(Source::encode));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    EncodeInput input;
+    input.path = in.exr;
+    auto job = FrameJob::create(std::move(*r), {}, input);
+    EXPECT_TRUE(job.ok()) << job.error().message;
+    return run_frame_job(**job);
+  };
+  auto has = [](const std::vector<std::string>& ws, const char* what) {
+    for (const auto& w : ws)
+      if (w.find(what) != std::string::npos) return true;
+    return false;
+  };
+  for (const char* mode : {"hdr10", "hlg"}) {
+    auto result = run(fmt::format(R"({{"display":{{"mode":"{}","peak_nits":150}},"formats":["png","raw","jpeg-gainmap","avif"]}})",
+                                  mode)
+                          .c_str());
+    ASSERT_TRUE(result.ok()) << mode << ": " << result.error().message;
+    EXPECT_EQ(result->frame.target.paper_white_nits, 150) << mode;
+    EXPECT_EQ(result->frame.target.ui_white_nits, 150) << mode;
+    EXPECT_EQ(result->files.size(), 4u) << mode;
+    EXPECT_TRUE(has(result->warnings, "paper white follows the peak")) << mode;
+  }
+  auto asked = run(R"({"display":{"mode":"hdr10","peak_nits":150,"paper_white_nits":203},"formats":["raw"]})");
+  ASSERT_TRUE(asked.ok()) << asked.error().message;
+  EXPECT_EQ(asked->frame.target.paper_white_nits, 203);
+  EXPECT_TRUE(has(asked->warnings, "clipped at the peak"));
+  auto plain = run(R"({"display":{"mode":"hdr10","peak_nits":1000},"formats":["raw"]})");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_FALSE(has(plain->warnings, "paper white"));
+}
+
 TEST(FrameJob, StillsAreRefusedWhereTheModeHasNoForm) {
   auto create = [](const char* body) {
     auto r = parse_request_json(json::parse(body), cli_context(Source::pattern));
