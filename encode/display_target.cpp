@@ -86,6 +86,11 @@ std::optional<SdrCurve> parse_sdr_curve(std::string_view s) {
 MasteringDisplay DisplayTarget::mastering() const {
   MasteringDisplay md;
   if (display_primaries) md.primaries = *display_primaries;
+  // ST 2086 describes the display the content was mastered on; hdrd grades every frame in
+  // D65 (the working space and every container are D65), so the mastering white is D65 and
+  // not a panel's native white (the Hisense fixture's EDID says (0.2822, 0.2969)), whose
+  // primaries alone describe the display's gamut.
+  md.primaries.white = color::kD65;
   md.max_nits = peak_nits;
   md.min_nits = black_nits;
   return md;

@@ -89,8 +89,9 @@ struct DisplayTarget {
   Range range = Range::full;
   SdrCurve sdr_curve = SdrCurve::srgb;
   int bits = 10;                     // 10 for hdr10/hlg; 8 or 10 for SDR; 16 (half) for scrgb
-  // Primaries of the target display (from EDID when known); used for ST 2086
-  // mastering metadata. The signal container is fixed by the mode.
+  // Primaries of the target display (from EDID when known); their red, green and blue are
+  // the ST 2086 mastering primaries, whose white is D65 whatever the panel's (mastering()).
+  // The signal container is fixed by the mode.
   std::optional<color::Primaries> display_primaries;
   // Where the levels came from: "defaults", or a display profile's source
   // ("edid:<name>", "+override:<file>"), then "+request" when the request set a level.

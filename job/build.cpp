@@ -33,6 +33,17 @@ Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::st
   if (profile && warnings) {
     warnings->push_back("display profile: " + profile->source + " (" + profile->mode_reason + ")");
     for (const auto& n : profile->notes) warnings->push_back(n);
+    // A mode asked for whose transfer the display does not signal: it may show it wrongly.
+    const bool unsignalled = (mode == Mode::hdr10 && !profile->signals_pq) || (mode == Mode::hlg && !profile->signals_hlg);
+    if (asked && unsignalled)
+      warnings->push_back(fmt::format("display {} does not signal {} (it signals {}): {} was asked for and is sent "
+                                      "anyway; the display may not decode it",
+                                      profile->source, mode == Mode::hdr10 ? "SMPTE ST 2084 (PQ)" : "HLG",
+                                      profile->signals_pq && profile->signals_hlg ? "PQ and HLG"
+                                      : profile->signals_pq                       ? "PQ only"
+                                      : profile->signals_hlg                      ? "HLG only"
+                                                                                  : "no HDR transfer",
+                                      to_string(mode)));
   }
   auto t = resolve_target(mode, profile ? display::profile_levels(*profile) : LevelSettings{}, request_levels(r),
                           profile ? profile->source : "");
