@@ -418,7 +418,12 @@ nlohmann::json resolved_request(const FrameRequest& r, const EncodedFrame& f) {
   nlohmann::json j = r.canonical();
   const DisplayTarget& t = f.target;
   j["display"]["mode"] = to_string(t.mode);
-  j["display"]["peak_nits"] = t.peak_nits;
+  // The clipping pattern's signal spans PQ's 10000 cd/m2 whatever the display (its frame's
+  // target says so); the request's peak is the display's, which its squares default to.
+  const auto pattern = f.settings.find("pattern");
+  j["display"]["peak_nits"] = pattern != f.settings.end() && pattern->contains("display_peak_nits")
+                                  ? (*pattern)["display_peak_nits"].get<double>()
+                                  : t.peak_nits;
   j["display"]["black_nits"] = t.black_nits;
   j["display"]["paper_white_nits"] = t.paper_white_nits;
   j["display"]["ui_white_nits"] = t.ui_white_nits;

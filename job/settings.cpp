@@ -291,7 +291,8 @@ std::vector<Setting> make_table() {
        .doc = "Test pattern: bt2111, pq-ramp, window, near-black, clipping, sdr-grey (docs/patterns.md)",
        .default_doc = "required", .max_length = 64},
       {.path = "params.level_nits", .type = T::number, .sources = kPattern,
-       .doc = "window, clipping: the level", .unit = "cd/m2", .min = 1e-4, .max = 10000,
+       .doc = "window: the level; clipping: the 1.0x square's level (squares 0.7..1.5x, encoded over the signal's "
+              "full range, so the display, not hdrd, clips them)", .unit = "cd/m2", .min = 1e-4, .max = 10000,
        .default_doc = "the display's peak", .flag = "--level", .metavar = "NITS", .query = "level_nits"},
       {.path = "params.area_percent", .type = T::number, .sources = kPattern,
        .doc = "window: area in percent of the frame (1, 2, 10, 25, 50, 100 are the usual)", .unit = "%", .min = 0.01,
