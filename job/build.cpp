@@ -29,7 +29,17 @@ Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::st
       warnings->push_back(fmt::format("display {}: no display attached (headless); using the mode's defaults", connector));
   }
   const auto asked = parse_mode(r.text("display.mode"));
-  const Mode mode = asked ? *asked : profile ? profile->mode : Mode::hdr10;
+  Mode mode = asked ? *asked : profile ? profile->mode : Mode::hdr10;
+  // SDR video is BT.709 (H.273 transfer 1, the BT.1886 display EOTF it implies), which
+  // players and TVs expect of video, not the sRGB curve of stills (transfer 13): the frames
+  // are encoded as sdr-bt1886 unless video.sdr_transfer or an explicit SDR curve says otherwise.
+  if (mode == Mode::sdr && r.has("video.codec") && r.text("video.sdr_transfer") != "srgb" &&
+      !r.has("display.sdr_curve")) {
+    mode = Mode::sdr_bt1886;
+    if (warnings)
+      warnings->push_back("SDR video is BT.709 (H.273 transfer 1, displayed with BT.1886): the frames are encoded as "
+                          "sdr-bt1886 (--sdr-video-transfer srgb keeps the sRGB curve, transfer 13)");
+  }
   if (profile && warnings) {
     warnings->push_back("display profile: " + profile->source + " (" + profile->mode_reason + ")");
     for (const auto& n : profile->notes) warnings->push_back(n);

@@ -31,6 +31,7 @@ constexpr std::string_view kGainMapChannels[] = {"rgb", "luminance"};
 constexpr std::string_view kCodecs[] = {"hevc", "av1", "h264"};
 constexpr std::string_view kContainers[] = {"mp4", "mkv"};
 constexpr std::string_view kAv1Encoders[] = {"libsvtav1", "libaom-av1"};
+constexpr std::string_view kSdrVideoTransfers[] = {"bt709", "srgb"};
 constexpr std::string_view kGranularity[] = {"scene", "frame"};
 constexpr std::string_view kPacing[] = {"every-frame", "realtime"};
 constexpr std::string_view kBackends[] = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
@@ -391,6 +392,12 @@ std::vector<Setting> make_table() {
        .default_json = "false", .flag = "--video-lossless", .sequence = true},
       {.path = "video.range", .type = T::choice, .sources = kSceneReferred, .doc = "Sequences: Y'CbCr code range",
        .choices = kRanges, .default_json = "\"narrow\"", .flag = "--video-range", .metavar = "RANGE",
+       .sequence = true},
+      {.path = "video.sdr_transfer", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Sequences: the transfer of SDR (--mode sdr) video: bt709 encodes for the BT.1886 display and tags "
+              "H.273 transfer 1 (BT.709), as players and TVs expect of video (the frames are sdr-bt1886); srgb keeps "
+              "the sRGB curve, tagged 13 (IEC 61966-2-1). An explicit --sdr-curve keeps its curve",
+       .choices = kSdrVideoTransfers, .default_json = "\"bt709\"", .flag = "--sdr-video-transfer", .metavar = "T",
        .sequence = true},
       {.path = "video.keyframe_interval_s", .type = T::number, .sources = kSceneReferred,
        .doc = "Sequences: longest closed GOP (every scene cut is a keyframe too)", .unit = "s", .min = 0.01,

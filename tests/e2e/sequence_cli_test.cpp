@@ -125,6 +125,30 @@ TEST(SequenceCli, LosslessHevcCarriesTheDumpsYPrimeAndItsTags) {
   }
 }
 
+// Issue 29 item 4: SDR video is tagged BT.709 (transfer 1, BT.1886 display) by default, as
+// players expect, not sRGB (13); --sdr-video-transfer srgb keeps 13. ffprobe reads the tags.
+TEST(SequenceCli, SdrVideoIsBt709ByDefault) {
+  if (!have("ffprobe")) GTEST_SKIP() << "ffprobe missing (apt-get install ffmpeg)";
+  TempDir d;
+  write_shots(d.path(), 3);
+  const std::pair<const char*, const char*> cases[] = {{"", "bt709"}, {" --sdr-video-transfer srgb", "iec61966-2-1"}};
+  for (const auto& [flag, want] : cases) {
+    const fs::path out = d / "sdr";
+    const auto r = run_command(fmt::format("'{}' encode '{}' --mode sdr --video hevc --preset ultrafast --format raw "
+                                           "-o '{}' --json -q{}",
+                                           hdrd(), (d / "s.%d.exr").string(), out.string(), flag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json probe = ffprobe(d / "sdr.mp4");
+    ASSERT_EQ(probe["streams"].size(), 1u);
+    EXPECT_EQ(probe["streams"][0]["color_transfer"], want) << flag;
+    EXPECT_EQ(probe["streams"][0]["color_primaries"], "bt709");
+    const json sidecar = json::parse(r.out);
+    EXPECT_EQ(sidecar["video"]["transfer_characteristics"], std::string(want) == "bt709" ? 1 : 13) << flag;
+    const json frame = json::parse(hdrd::testing::read_file(d / "sdr.00000.json"));
+    EXPECT_EQ(frame["transfer"], std::string(want) == "bt709" ? "bt1886" : "srgb") << flag;
+  }
+}
+
 TEST(SequenceCli, Hdr10PlusJsonIsWithinSt2094_40) {
   TempDir d;
   write_shots(d.path(), 4, 8.0);
