@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -146,6 +147,38 @@ TEST(SequenceCli, SdrVideoIsBt709ByDefault) {
     EXPECT_EQ(sidecar["video"]["transfer_characteristics"], std::string(want) == "bt709" ? 1 : 13) << flag;
     const json frame = json::parse(hdrd::testing::read_file(d / "sdr.00000.json"));
     EXPECT_EQ(frame["transfer"], std::string(want) == "bt709" ? "bt1886" : "srgb") << flag;
+  }
+}
+
+// Issue 29 item 5: a keyframe at every detected scene cut with the default AV1 encoder
+// (SVT-AV1, which ignored the request: one keyframe, frame 0), libaom and HEVC alike. Five
+// scenes of three 64x64 frames, 4 stops apart; ffprobe's key_frame flags against the
+// sidecar's scenes.
+TEST(SequenceCli, EveryVideoEncoderPutsAKeyframeAtEverySceneCut) {
+  if (!have("ffprobe")) GTEST_SKIP() << "ffprobe missing (apt-get install ffmpeg)";
+  TempDir d;
+  const double gains[5] = {1, 16, 1, 16, 1};
+  for (int i = 0; i < 15; ++i) {
+    hdrd::Image img(64, 64);
+    for (std::size_t p = 0; p < img.pixel_count(); ++p)
+      for (int c = 0; c < 3; ++c)
+        img.rgba[p * 4 + c] = static_cast<float>(gains[i / 3] * (0.05 + 0.9 * static_cast<double>(p % 64) / 64) * (c + 1) / 3);
+    ASSERT_TRUE(hdrd::io::write_exr(d / fmt::format("c.{}.exr", i), img, {}).ok());
+  }
+  const char* encoders[] = {"--video av1", "--video av1 --av1-encoder libaom-av1 --preset 8", "--video hevc --preset ultrafast"};
+  for (const char* enc : encoders) {
+    SCOPED_TRACE(enc);
+    const auto r = run_command(fmt::format("'{}' encode '{}' --mode hdr10 {} --format raw -o '{}' --json -q", hdrd(),
+                                           (d / "c.%d.exr").string(), enc, (d / "v").string()));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json sidecar = json::parse(r.out);
+    std::set<int> starts;
+    for (const auto& s : sidecar["scenes"]) starts.insert(s["first_frame"].get<int>());
+    ASSERT_EQ(starts, (std::set<int>{0, 3, 6, 9, 12})) << sidecar["scenes"];
+    const json probe = ffprobe(d / "v.mp4");
+    ASSERT_EQ(probe["frames"].size(), 15u);
+    for (int i = 0; i < 15; ++i)
+      if (starts.count(i)) EXPECT_EQ(probe["frames"][i]["key_frame"], 1) << "frame " << i << " starts a scene";
   }
 }
 
