@@ -3,7 +3,9 @@
 //         DisplayID 2.0 "BT.2020/SMPTE ST 2084" interface combination), HLG when HLG is
 //         signalled without ST 2084, otherwise SDR.
 //  peak   desired content max luminance; when missing, CV 0, below 100 or above 10000
-//         cd/m2: DisplayID's native max (10 %), else 1000 (HDR) / 100 (SDR).
+//         cd/m2: DisplayID's native max (10 %); else (HDR) the block's max frame-average,
+//         the product name's DisplayHDR tier, 400 for a BT.709-class monitor, else 1000;
+//         100 (SDR).
 //  FALL   desired content max frame-average; when missing: DisplayID full-coverage max,
 //         else the peak; never above the peak.
 //  black  desired content min luminance (computed from the same block's max, so unusable
@@ -11,6 +13,7 @@
 //  primaries  base block chromaticities; else DisplayID's; else Rec.709.
 #include "display/profile.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -81,6 +84,60 @@ std::optional<double> usable_max(const EdidInfo& e, Profile& p) {
   return max;
 }
 
+double gamut_area(const color::Primaries& pr) {
+  return std::abs((pr.green.x - pr.red.x) * (pr.blue.y - pr.red.y) - (pr.blue.x - pr.red.x) * (pr.green.y - pr.red.y)) / 2;
+}
+
+// The VESA DisplayHDR tier a product name states ("DisplayHDR 600", "HDR400"), if any.
+std::optional<int> displayhdr_tier(const std::string& name) {
+  std::string n;
+  for (char c : name) n += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (std::size_t at = n.find("HDR"); at != std::string::npos; at = n.find("HDR", at + 3)) {
+    std::size_t i = at + 3;
+    if (i < n.size() && (n[i] == ' ' || n[i] == '-' || n[i] == '_')) ++i;
+    int tier = 0, digits = 0;
+    while (i < n.size() && std::isdigit(static_cast<unsigned char>(n[i])) && digits < 5) tier = tier * 10 + (n[i++] - '0'), ++digits;
+    for (int t : {400, 500, 600, 1000, 1400})
+      if (tier == t) return t;
+  }
+  return std::nullopt;
+}
+
+// An HDR display whose block max (and DisplayID) is unusable: the peak the EDID's other
+// fields and the panel class imply, most specific first, each said in a note.
+void fallback_hdr_peak(const EdidInfo& e, Profile& p) {
+  const std::string why = "no usable max luminance";
+  if (e.hdr_static_metadata && e.hdr_static_metadata->max_frame_avg_luminance_cv &&
+      *e.hdr_static_metadata->max_frame_avg_luminance_cv != 0) {
+    const double fall = *e.hdr_static_metadata->max_frame_avg_luminance_cd_m2();
+    if (plausible_peak(fall)) {
+      p.peak_nits = fall;
+      p.notes.push_back(fmt::format("{}: peak {:.1f} cd/m2 from the desired content max frame-average luminance "
+                                    "(a display's peak is at least its frame-average)", why, fall));
+      return;
+    }
+  }
+  if (const auto tier = displayhdr_tier(p.name)) {
+    p.peak_nits = *tier;
+    p.notes.push_back(fmt::format("{}: peak {} cd/m2 from the product name's VESA DisplayHDR {} class", why, *tier, *tier));
+    return;
+  }
+  // A desktop monitor (an image width the EDID gives, up to 80 cm: 36 inch at 16:9) whose
+  // gamut is BT.709-class (below 1.1 x BT.709's area; the DisplayHDR tiers above 400 need
+  // 90 % of DCI-P3) is at best the lowest HDR class, DisplayHDR 400.
+  const bool monitor = e.width_cm > 0 && e.width_cm <= kMaxMonitorWidthCm;
+  if (monitor && gamut_area(p.primaries) < 1.1 * gamut_area(color::kRec709)) {
+    p.peak_nits = kFallbackBt709MonitorPeakNits;
+    p.notes.push_back(fmt::format("{}: peak falls back to {:.0f} cd/m2, the VESA DisplayHDR 400 class of a "
+                                  "{} cm wide monitor with a BT.709-class gamut", why, kFallbackBt709MonitorPeakNits,
+                                  e.width_cm));
+    return;
+  }
+  p.peak_nits = kFallbackHdrPeakNits;
+  p.notes.push_back(fmt::format("{}: peak falls back to {:.0f} cd/m2 (hdrd's HDR default; KWin uses 800, gamescope "
+                                "1499)", why, kFallbackHdrPeakNits));
+}
+
 void choose_peak(const EdidInfo& e, std::optional<double> block_max, Profile& p) {
   if (block_max) {
     p.peak_nits = *block_max;
@@ -94,9 +151,7 @@ void choose_peak(const EdidInfo& e, std::optional<double> block_max, Profile& p)
     p.peak_nits = d->max_full_cd_m2();
     p.notes.push_back(fmt::format("peak {:.1f} cd/m2 from DisplayID native max luminance (full coverage)", p.peak_nits));
   } else if (p.is_hdr()) {
-    p.peak_nits = kFallbackHdrPeakNits;
-    p.notes.push_back(fmt::format("no usable max luminance: peak falls back to {:.0f} cd/m2 (hdrd's HDR default; "
-                                  "KWin uses 800, gamescope 1499)", kFallbackHdrPeakNits));
+    fallback_hdr_peak(e, p);
   } else {
     p.peak_nits = kFallbackSdrPeakNits;
   }
@@ -185,11 +240,11 @@ Profile profile_from_edid_info(const EdidInfo& e) {
   p.signals_bt2020_rgb = s.bt2020_rgb;
   p.hdr10plus = e.hdr10plus_vsvdb;
   choose_mode(s, p);
+  choose_primaries(e, p);  // first: the peak's fallback reads the panel's gamut
   const auto block_max = usable_max(e, p);
   choose_peak(e, block_max, p);
   choose_frame_average(e, block_max.has_value(), p);
   choose_black(e, block_max.has_value(), p);
-  choose_primaries(e, p);
   p.source = "edid:" + (e.name.empty() ? fmt::format("{}{:04X}", e.manufacturer, e.product_code) : e.name);
   return p;
 }

@@ -23,6 +23,8 @@ namespace hdrd::display {
 // Fallbacks, named so docs and tests can cite them.
 inline constexpr double kFallbackHdrPeakNits = 1000.0;   // REFERENCE.md §1.8 hdr10/hlg default
 inline constexpr double kFallbackSdrPeakNits = 100.0;    // REFERENCE.md §1.8 SDR white
+inline constexpr double kFallbackBt709MonitorPeakNits = 400.0;  // VESA DisplayHDR 400, the lowest HDR class
+inline constexpr int kMaxMonitorWidthCm = 80;                   // wider (or size unknown): a TV-class panel
 inline constexpr double kMinPlausibleHdrPeakNits = 100.0;  // below SDR reference white: not an HDR claim
 inline constexpr double kMaxPqNits = 10000.0;            // SMPTE ST 2084 ceiling
 

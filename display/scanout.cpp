@@ -86,6 +86,10 @@ Result<EncodedFrame> scrgb_to_hdr10(const EncodedFrame& in) {
   out.mastering = in.mastering;
   out.settings = in.settings;
   const color::Mat3 to2020 = color::rgb_to_rgb(color::kRec709, color::kRec2020);
+  // No code above the peak's (the encoder's rule, encode/kernel/pipeline_internal.hpp
+  // peak_code): the largest code whose light is at most the peak, not the nearest.
+  int top = 1023;
+  while (top > 0 && transfer::pq_eotf(transfer::dequantize_full(top, 10)) > in.target.peak_nits) --top;
   double max_cll = 0, max_fall = 0, sum = 0;
   for (int y = 0; y < in.height; ++y) {
     const std::uint8_t* src = in.data.data() + static_cast<std::size_t>(y) * in.stride_bytes;
@@ -98,7 +102,7 @@ Result<EncodedFrame> scrgb_to_hdr10(const EncodedFrame& in) {
       const double m = std::max({nits.x, nits.y, nits.z});
       max_cll = std::max(max_cll, m);
       sum += m;
-      auto code = [](double v) { return transfer::quantize_full(transfer::pq_inverse_eotf(v), 10); };
+      auto code = [top](double v) { return std::min(transfer::quantize_full(transfer::pq_inverse_eotf(v), 10), top); };
       store32(dst + 4 * x, pack_xbgr2101010(code(nits.x), code(nits.y), code(nits.z)));
     }
   }

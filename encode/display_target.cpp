@@ -86,6 +86,11 @@ std::optional<SdrCurve> parse_sdr_curve(std::string_view s) {
 MasteringDisplay DisplayTarget::mastering() const {
   MasteringDisplay md;
   if (display_primaries) md.primaries = *display_primaries;
+  // ST 2086 describes the display the content was mastered on; hdrd grades every frame in
+  // D65 (the working space and every container are D65), so the mastering white is D65 and
+  // not a panel's native white (the Hisense fixture's EDID says (0.2822, 0.2969)), whose
+  // primaries alone describe the display's gamut.
+  md.primaries.white = color::kD65;
   md.max_nits = peak_nits;
   md.min_nits = black_nits;
   return md;
@@ -104,6 +109,19 @@ H273 h273(const DisplayTarget& t) {
   return c;
 }
 
+std::optional<std::string> paper_white_note(const DisplayTarget& t, bool paper_white_asked) {
+  const auto& standard = t.info().paper_white_nits;
+  if (!paper_white_asked && standard && *standard > t.peak_nits)
+    return fmt::format("paper white follows the peak: {} cd/m2, not the {} cd/m2 default above the display peak "
+                       "(--paper-white sets it)",
+                       t.paper_white_nits, *standard);
+  if (t.paper_white_nits > t.peak_nits)
+    return fmt::format("paper white {} cd/m2 is above the peak {} cd/m2: diffuse white and everything above it is "
+                       "clipped at the peak",
+                       t.paper_white_nits, t.peak_nits);
+  return std::nullopt;
+}
+
 Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, const LevelSettings& request,
                                      std::string_view display_source) {
   const ModeInfo& info = mode_info(mode);
@@ -113,7 +131,11 @@ Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, co
   t.peak_nits = pick(request.peak_nits, display.peak_nits, info.peak_nits);
   t.black_nits = pick(request.black_nits, display.black_nits, info.black_nits);
   // The coupling rule (REFERENCE.md §1.4, §1.8), in this one place.
-  t.paper_white_nits = pick(request.paper_white_nits, display.paper_white_nits, info.paper_white_nits.value_or(t.peak_nits));
+  // Paper white follows a peak below it (--peak 150 in hdr10 gives paper white 150, not
+  // 203 above the display's white); one that is asked for is kept, and clipped at the peak
+  // by every output alike (job::resolve_display warns of both, paper_white_note).
+  t.paper_white_nits = pick(request.paper_white_nits, display.paper_white_nits,
+                            std::min(info.paper_white_nits.value_or(t.peak_nits), t.peak_nits));
   t.ui_white_nits = pick(request.ui_white_nits, display.ui_white_nits, t.paper_white_nits);
   t.sdr_white_nits = pick(request.sdr_white_nits, display.sdr_white_nits, t.paper_white_nits);
   t.range = pick(request.range, display.range, Range::full);

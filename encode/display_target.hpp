@@ -89,8 +89,9 @@ struct DisplayTarget {
   Range range = Range::full;
   SdrCurve sdr_curve = SdrCurve::srgb;
   int bits = 10;                     // 10 for hdr10/hlg; 8 or 10 for SDR; 16 (half) for scrgb
-  // Primaries of the target display (from EDID when known); used for ST 2086
-  // mastering metadata. The signal container is fixed by the mode.
+  // Primaries of the target display (from EDID when known); their red, green and blue are
+  // the ST 2086 mastering primaries, whose white is D65 whatever the panel's (mastering()).
+  // The signal container is fixed by the mode.
   std::optional<color::Primaries> display_primaries;
   // Where the levels came from: "defaults", or a display profile's source
   // ("edid:<name>", "+override:<file>"), then "+request" when the request set a level.
@@ -135,6 +136,11 @@ Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, co
 
 // Per-mode defaults (REFERENCE.md §1.8): resolve_target with nothing said.
 DisplayTarget default_target(Mode m);
+// The one rule for a peak below paper white, said to the user: the default paper white
+// follows a lower peak (a note saying so), an asked-for one above the peak is clipped there
+// (a note saying so); nullopt otherwise. paper_white_asked: the request or the display
+// profile set it.
+std::optional<std::string> paper_white_note(const DisplayTarget& t, bool paper_white_asked);
 
 // Checks levels for sanity (finite, positive, black < peak, paper white <= 10000, bits valid
 // for the mode). Returns the first problem, naming the field.

@@ -22,8 +22,10 @@ struct ContentLightLevel {
 };
 
 // The one rule for what every container carries as MaxCLL / MaxFALL (CTA-861.3,
-// REFERENCE.md §6): whole cd/m2 rounded up, so no container understates the content; a
-// value that would be 0 (a black frame) is the mastering display's peak instead, because
+// REFERENCE.md §6): whole cd/m2 rounded up, so no container understates the content, but
+// never above the mastering maximum rounded down (the encoder caps codes at the peak's, so
+// only a fractional peak meets this bound); a value that would be 0 (a black frame) is that
+// mastering maximum instead, because
 // CTA-861.3 reads 0 as "unknown" and some sinks mishandle it; MaxFALL at most MaxCLL; at
 // most 65535 (the InfoFrame's u16). The sidecar's `content_light_level`, the PNG cLLI (these
 // values x 10000 in its 0.0001 cd/m2 unit) and the HDR_OUTPUT_METADATA blob all carry exactly

@@ -244,6 +244,36 @@ int signal_bottom_exp2(const std::function<double(double)>& f, int from) {
 }
 }  // namespace
 
+namespace {
+// The largest code in [0, top] whose decoded light is at most the peak (decoded rises with
+// the code); 0 when even code 0 is above it.
+template <class Decode>
+int peak_code_at_most(const Decode& decoded, int top, double peak_nits) {
+  int lo = 0, hi = top;  // invariant: the answer is in [lo, hi]
+  if (decoded(top) <= peak_nits) return top;
+  while (lo < hi) {
+    const int mid = lo + (hi - lo + 1) / 2;
+    if (decoded(mid) <= peak_nits) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+}  // namespace
+
+PeakCodes peak_codes(const DisplayTarget& t) {
+  const int bits = t.mode == Mode::scrgb ? 16 : t.bits;
+  PeakCodes p{(1 << std::min(bits, 16)) - 1, 65535};
+  if (t.mode != Mode::hdr10) return p;  // the other transfers' top signal is the peak
+  const auto decoded = [&](int c) {
+    return transfer::pq_eotf(t.range == Range::narrow ? std::clamp(transfer::dequantize_narrow(c, bits), 0.0, 1.0)
+                                                      : transfer::dequantize_full(c, bits));
+  };
+  p.code = peak_code_at_most(decoded, p.code, t.peak_nits);
+  if (t.range == Range::full)
+    p.signal16 = peak_code_at_most([](int k) { return transfer::pq_eotf(k / 65535.0); }, 65535, t.peak_nits);
+  return p;
+}
+
 SignalStage build_signal_stage(const DisplayTarget& t) {
   SignalStage s;
   s.mode = t.mode;
@@ -293,10 +323,13 @@ SignalStage build_signal_stage(const DisplayTarget& t) {
       break;
   }
   if (f) s.signal = FloatBitsLut(f, signal_bottom_exp2(f, min_exp2), max_exp2, kinks);
+  const PeakCodes top = peak_codes(t);
+  s.peak_code = top.code;
+  s.signal_max = top.signal16 / 65535.0f;
   if (f && t.mode != Mode::hlg) {
     const double scale = t.range == Range::narrow ? 219.0 * std::ldexp(1.0, bits - 8) : s.max_code;
     const double offset = t.range == Range::narrow ? 16.0 * std::ldexp(1.0, bits - 8) : 0.0;
-    const int max_code = s.max_code;
+    const int max_code = s.peak_code;
     s.codes = FloatBitsQuantizer(
         [&](double nits) {
           const double v = std::floor(std::clamp(f(nits), 0.0, 1.0) * scale + offset + 0.5);

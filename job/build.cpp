@@ -29,10 +29,31 @@ Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::st
       warnings->push_back(fmt::format("display {}: no display attached (headless); using the mode's defaults", connector));
   }
   const auto asked = parse_mode(r.text("display.mode"));
-  const Mode mode = asked ? *asked : profile ? profile->mode : Mode::hdr10;
+  Mode mode = asked ? *asked : profile ? profile->mode : Mode::hdr10;
+  // SDR video is BT.709 (H.273 transfer 1, the BT.1886 display EOTF it implies), which
+  // players and TVs expect of video, not the sRGB curve of stills (transfer 13): the frames
+  // are encoded as sdr-bt1886 unless video.sdr_transfer or an explicit SDR curve says otherwise.
+  if (mode == Mode::sdr && r.has("video.codec") && r.text("video.sdr_transfer") != "srgb" &&
+      !r.has("display.sdr_curve")) {
+    mode = Mode::sdr_bt1886;
+    if (warnings)
+      warnings->push_back("SDR video is BT.709 (H.273 transfer 1, displayed with BT.1886): the frames are encoded as "
+                          "sdr-bt1886 (--sdr-video-transfer srgb keeps the sRGB curve, transfer 13)");
+  }
   if (profile && warnings) {
     warnings->push_back("display profile: " + profile->source + " (" + profile->mode_reason + ")");
     for (const auto& n : profile->notes) warnings->push_back(n);
+    // A mode asked for whose transfer the display does not signal: it may show it wrongly.
+    const bool unsignalled = (mode == Mode::hdr10 && !profile->signals_pq) || (mode == Mode::hlg && !profile->signals_hlg);
+    if (asked && unsignalled)
+      warnings->push_back(fmt::format("display {} does not signal {} (it signals {}): {} was asked for and is sent "
+                                      "anyway; the display may not decode it",
+                                      profile->source, mode == Mode::hdr10 ? "SMPTE ST 2084 (PQ)" : "HLG",
+                                      profile->signals_pq && profile->signals_hlg ? "PQ and HLG"
+                                      : profile->signals_pq                       ? "PQ only"
+                                      : profile->signals_hlg                      ? "HLG only"
+                                                                                  : "no HDR transfer",
+                                      to_string(mode)));
   }
   auto t = resolve_target(mode, profile ? display::profile_levels(*profile) : LevelSettings{}, request_levels(r),
                           profile ? profile->source : "");
@@ -41,6 +62,10 @@ Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::st
     e.code = profile ? "display.invalid" : "request.value";
     return e;
   }
+  const bool paper_white_asked =
+      r.has("display.paper_white_nits") || (profile && display::profile_levels(*profile).paper_white_nits);
+  if (auto note = paper_white_note(*t, paper_white_asked); note && warnings && !mode_info(mode).sdr())
+    warnings->push_back(*note);
   if (mode_info(mode).sdr() && r.has("display.paper_white_nits") && t->paper_white_nits != t->peak_nits && warnings)
     warnings->push_back(fmt::format("SDR paper white {} cd/m2 differs from the peak {} cd/m2", t->paper_white_nits,
                                     t->peak_nits));

@@ -352,6 +352,11 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   const CpuMeter encode_cpu;
   for (auto& w : exr->warnings) st.warnings.push_back(std::move(w));
   if (st.stopped()) return cancelled();
+  const io::NonFiniteSamples non_finite = io::count_non_finite(*exr);
+  if (non_finite.total() > 0)
+    st.warnings.push_back(fmt::format("input has {} non-finite R, G, B samples ({} NaN, {} infinite): NaN is encoded "
+                                      "as 0 and +-Inf as the brightest light, which the tone curve takes to the peak",
+                                      non_finite.total(), non_finite.nan, non_finite.inf));
   st.exr = std::move(*exr);
   SceneInput in;
   if (st.exr->holds_half())
@@ -384,7 +389,8 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
                           {"channels", st.exr->channels},
                           {"compression", st.exr->compression},
                           {"width", st.exr->width()},
-                          {"height", st.exr->height()}};
+                          {"height", st.exr->height()},
+                          {"non_finite_samples", {{"nan", non_finite.nan}, {"inf", non_finite.inf}}}};
   if (upload_bytes > 0) f->settings["input"]["bytes"] = upload_bytes;
   st.cpu_input = in;
   return f;
@@ -412,7 +418,12 @@ nlohmann::json resolved_request(const FrameRequest& r, const EncodedFrame& f) {
   nlohmann::json j = r.canonical();
   const DisplayTarget& t = f.target;
   j["display"]["mode"] = to_string(t.mode);
-  j["display"]["peak_nits"] = t.peak_nits;
+  // The clipping pattern's signal spans PQ's 10000 cd/m2 whatever the display (its frame's
+  // target says so); the request's peak is the display's, which its squares default to.
+  const auto pattern = f.settings.find("pattern");
+  j["display"]["peak_nits"] = pattern != f.settings.end() && pattern->contains("display_peak_nits")
+                                  ? (*pattern)["display_peak_nits"].get<double>()
+                                  : t.peak_nits;
   j["display"]["black_nits"] = t.black_nits;
   j["display"]["paper_white_nits"] = t.paper_white_nits;
   j["display"]["ui_white_nits"] = t.ui_white_nits;

@@ -238,7 +238,9 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
                               {"max_fall_nits_measured", measured.max_fall_nits}};
   j.erase("settings");
   j["settings"] = {{"request", request.canonical()}};
-  j["warnings"] = sum.warnings;
+  std::vector<std::string> warnings = sum.warnings;
+  if (video) warnings.insert(warnings.end(), video->warnings.begin(), video->warnings.end());
+  j["warnings"] = warnings;
   if (!sum.present.is_null()) j["present"] = sum.present;
   nlohmann::json files = nlohmann::json::object();
   const std::string stem = outbase.filename().string();
@@ -284,7 +286,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
   out.files["sidecar"] = sidecar.string();
   out.sidecar = std::move(j);
   out.frames = static_cast<int>(sum.frames.size());
-  out.warnings = sum.warnings;
+  out.warnings = warnings;
   out.timings_ms = std::move(timings);
   return out;
 }

@@ -31,6 +31,7 @@ constexpr std::string_view kGainMapChannels[] = {"rgb", "luminance"};
 constexpr std::string_view kCodecs[] = {"hevc", "av1", "h264"};
 constexpr std::string_view kContainers[] = {"mp4", "mkv"};
 constexpr std::string_view kAv1Encoders[] = {"libsvtav1", "libaom-av1"};
+constexpr std::string_view kSdrVideoTransfers[] = {"bt709", "srgb"};
 constexpr std::string_view kGranularity[] = {"scene", "frame"};
 constexpr std::string_view kPacing[] = {"every-frame", "realtime"};
 constexpr std::string_view kBackends[] = {"auto", "egl", "egl-device", "egl-surfaceless", "osmesa"};
@@ -291,7 +292,8 @@ std::vector<Setting> make_table() {
        .doc = "Test pattern: bt2111, pq-ramp, window, near-black, clipping, sdr-grey (docs/patterns.md)",
        .default_doc = "required", .max_length = 64},
       {.path = "params.level_nits", .type = T::number, .sources = kPattern,
-       .doc = "window, clipping: the level", .unit = "cd/m2", .min = 1e-4, .max = 10000,
+       .doc = "window: the level; clipping: the 1.0x square's level (squares 0.7..1.5x, encoded over the signal's "
+              "full range, so the display, not hdrd, clips them)", .unit = "cd/m2", .min = 1e-4, .max = 10000,
        .default_doc = "the display's peak", .flag = "--level", .metavar = "NITS", .query = "level_nits"},
       {.path = "params.area_percent", .type = T::number, .sources = kPattern,
        .doc = "window: area in percent of the frame (1, 2, 10, 25, 50, 100 are the usual)", .unit = "%", .min = 0.01,
@@ -390,6 +392,12 @@ std::vector<Setting> make_table() {
        .default_json = "false", .flag = "--video-lossless", .sequence = true},
       {.path = "video.range", .type = T::choice, .sources = kSceneReferred, .doc = "Sequences: Y'CbCr code range",
        .choices = kRanges, .default_json = "\"narrow\"", .flag = "--video-range", .metavar = "RANGE",
+       .sequence = true},
+      {.path = "video.sdr_transfer", .type = T::choice, .sources = kSceneReferred,
+       .doc = "Sequences: the transfer of SDR (--mode sdr) video: bt709 encodes for the BT.1886 display and tags "
+              "H.273 transfer 1 (BT.709), as players and TVs expect of video (the frames are sdr-bt1886); srgb keeps "
+              "the sRGB curve, tagged 13 (IEC 61966-2-1). An explicit --sdr-curve keeps its curve",
+       .choices = kSdrVideoTransfers, .default_json = "\"bt709\"", .flag = "--sdr-video-transfer", .metavar = "T",
        .sequence = true},
       {.path = "video.keyframe_interval_s", .type = T::number, .sources = kSceneReferred,
        .doc = "Sequences: longest closed GOP (every scene cut is a keyframe too)", .unit = "s", .min = 0.01,

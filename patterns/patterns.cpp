@@ -21,8 +21,10 @@ constexpr PatternInfo kPatterns[] = {
     {"window", "A centred window of --area percent of the frame at --level cd/m2 on black",
      "peak-luminance windows as in VESA DisplayHDR CTS and ICDM IDMS 1.1"},
     {"near-black", "Labelled steps from 0.005 to 5 cd/m2 on a 0 cd/m2 background", "black-level (PLUGE-like) steps"},
-    {"clipping", "Squares from 0.7x to 1.5x --level on a 10000 cd/m2 background: at a display peak P the "
-                 "squares at and above P vanish",
+    {"clipping", "Squares at 0.7, 0.8, 0.9, 0.95, 1, 1.05, 1.1, 1.25 and 1.5x --level (default: the display's "
+                 "peak) on a 10000 cd/m2 background, encoded over the signal's full range (hdr10: 10000 cd/m2 "
+                 "codes; nothing clipped by hdrd): on a display that clips at P the squares at and above P vanish; "
+                 "the sidecar names each square's level",
      "HGIG HDR calibration guidelines (max-luminance clipping pattern)"},
     {"sdr-grey", "SDR signal steps 0..100 % decoded with the SDR EOTF and placed at the SDR white",
      "BT.2408 §5 (SDR white in an HDR frame)"},
@@ -316,7 +318,12 @@ Result<EncodedFrame> make_pattern(std::string_view name, const DisplayTarget& ta
   } else {
     auto nits = pattern_nits(name, target, o);
     if (!nits) return nits.error();
-    frame = encode_display_nits(*nits, target, keep_display_nits);
+    // The clipping pattern probes where the display clips, so hdrd must not clip it first:
+    // PQ's signal covers 10000 cd/m2 whatever the display's peak (the squares' default level),
+    // so it is encoded for that range. HLG and SDR signals end at the display's peak.
+    DisplayTarget encoded = target;
+    if (name == "clipping" && target.mode == Mode::hdr10) encoded.peak_nits = transfer::kPqPeakNits;
+    frame = encode_display_nits(*nits, encoded, keep_display_nits);
     const double level = o.level_nits > 0 ? o.level_nits : target.peak_nits;
     if (name == "window") desc["level_nits"] = level, desc["area_percent"] = o.area_percent;
     if (name == "sdr-shadows") {
@@ -330,10 +337,14 @@ Result<EncodedFrame> make_pattern(std::string_view name, const DisplayTarget& ta
       desc["level_nits"] = level;
       desc["square_nits"] = nlohmann::json::array();
       for (double r : kClipRatios) desc["square_nits"].push_back(level * r);
+      desc["background_nits"] = transfer::kPqPeakNits;
+      desc["display_peak_nits"] = target.peak_nits;
+      desc["signal_peak_nits"] = encoded.peak_nits;  // what the codes cover: nothing above it is clipped by hdrd
     }
-    if (level > target.peak_nits && (name == "window" || name == "clipping"))
-      desc["note"] = fmt::format("level {} cd/m2 is above the display peak {} cd/m2: the encoder clips it", level,
-                                 target.peak_nits);
+    if (level * (name == "clipping" ? kClipRatios[std::size(kClipRatios) - 1] : 1.0) > encoded.peak_nits &&
+        (name == "window" || name == "clipping"))
+      desc["note"] = fmt::format("level {} cd/m2 is above the signal's peak {} cd/m2: the encoder clips it", level,
+                                 encoded.peak_nits);
   }
   if (!frame) return frame.error();
   frame->settings["pattern"] = desc;

@@ -25,6 +25,15 @@ int quantize(const DisplayTarget& t, double signal) {
   return t.range == Range::narrow ? transfer::quantize_narrow(signal, t.bits) : transfer::quantize_full(signal, t.bits);
 }
 
+// The largest code whose light is at most the display peak, where the encoder clips
+// (ST 2084 decoded here; the other transfers end at the peak).
+int peak_code(const DisplayTarget& t) {
+  int c = t.range == Range::narrow ? quantize(t, 1.0) : max_code(t);
+  if (t.mode != Mode::hdr10) return c;
+  while (c > 0 && transfer::pq_eotf(std::clamp(code_to_signal(t, c), 0.0, 1.0)) > t.peak_nits) --c;
+  return c;
+}
+
 // The code paper white must land on, and the source that says so.
 std::pair<int, std::string> paper_white_code(const DisplayTarget& t) {
   const double pw = t.paper_white_nits;
@@ -32,7 +41,8 @@ std::pair<int, std::string> paper_white_code(const DisplayTarget& t) {
     case Mode::hdr10:
       if (pw == 203 && t.range == Range::full && t.bits == 10)
         return {594, "BT.2408-7 §2: 203 cd/m2 -> PQ 58 %, code 594 (10-bit full range)"};
-      return {quantize(t, transfer::pq_inverse_eotf(pw)), "SMPTE ST 2084 inverse EOTF of paper white"};
+      return {std::min(quantize(t, transfer::pq_inverse_eotf(pw)), peak_code(t)),
+              "SMPTE ST 2084 inverse EOTF of paper white (at most the peak's code)"};
     case Mode::hlg:
       if (pw == 203 && t.peak_nits == 1000)
         return {quantize(t, 0.75), "BT.2408-7 §2: 203 cd/m2 on a 1000 cd/m2 HLG display -> HLG 75 %"};
@@ -101,26 +111,25 @@ Check check_rec709_primaries(const EncodedFrame& f, const std::string& what) {
 Check check_peak(const EncodedFrame& f, const std::string& what) {
   const DisplayTarget& t = f.target;
   const std::string name = "peak/" + what;
-  if (t.mode == Mode::hdr10) {
-    const int limit = quantize(t, transfer::pq_inverse_eotf(t.peak_nits));
-    int highest = 0;
-    for (int y = 0; y < f.height; ++y)
-      for (int x = 0; x < f.width; ++x)
-        for (int c : read_pixel(f, x, y).code) highest = std::max(highest, c);
-    return make(name, "ST 2084: no code above the display peak's code", highest <= limit,
-                fmt::format("highest code {} vs peak code {} ({} cd/m2)", highest, limit, t.peak_nits));
-  }
+  // One rule in every mode: no pixel's channel decodes above the display peak (the largest
+  // code at or below it, not the nearest code to it, which half of all integer PQ peaks put
+  // above). Exact for the code modes; scRGB's half floats keep their rounding (2^-11).
   double highest = 0;
+  int highest_code = 0;
   for (int y = 0; y < f.height; ++y)
     for (int x = 0; x < f.width; ++x) {
       const color::Vec3 n = to_rec2020(t, decode_pixel(f, x, y));
       highest = std::max({highest, n.x, n.y, n.z});
+      if (t.mode != Mode::scrgb)
+        for (int c : read_pixel(f, x, y).code) highest_code = std::max(highest_code, c);
     }
-  // One code step near the peak (10-bit HLG, 8-bit SDR) or half-float rounding.
-  const double tolerance = t.mode == Mode::scrgb ? 1e-3 : (t.bits == 8 ? 0.01 : 0.005);
-  return make(name, "display light never above the display peak (REFERENCE.md §1.4)",
+  const double tolerance = t.mode == Mode::scrgb ? std::ldexp(1.0, -11) : 1e-9;
+  const std::string code = t.mode == Mode::scrgb ? "" : fmt::format(" (code {})", highest_code);
+  return make(name,
+              t.mode == Mode::hdr10 ? "ST 2084 / ST 2086: no code decodes above the display peak"
+                                    : "display light never above the display peak (REFERENCE.md §1.4)",
               highest <= t.peak_nits * (1 + tolerance),
-              fmt::format("brightest channel {:.2f} cd/m2 vs peak {} cd/m2", highest, t.peak_nits));
+              fmt::format("brightest channel {:.4f} cd/m2{} vs peak {} cd/m2", highest, code, t.peak_nits));
 }
 
 ContentLightLevel decode_content_light(const EncodedFrame& f) {
@@ -283,7 +292,7 @@ Check check_window(const EncodedFrame& f, double level_nits) {
   const PixelSignal p = read_pixel(f, f.width / 2, f.height / 2);
   const double target_nits = std::min(level_nits, t.peak_nits);
   int want = 0;
-  if (t.mode == Mode::hdr10) want = quantize(t, transfer::pq_inverse_eotf(target_nits));
+  if (t.mode == Mode::hdr10) want = std::min(quantize(t, transfer::pq_inverse_eotf(target_nits)), peak_code(t));
   else if (t.mode == Mode::hlg)
     want = quantize(t, transfer::hlg_inverse_eotf({target_nits, target_nits, target_nits}, t.peak_nits, t.black_nits).x);
   else if (t.mode == Mode::sdr) want = quantize(t, transfer::srgb_inverse_eotf(target_nits / t.peak_nits));

@@ -21,7 +21,7 @@ mkdir -p "$img"
 cp "$tmp/bars-pq.png" "$img/bt2111-pq.png"
 "$hdrd" pattern pq-ramp --mode hdr10 --peak 10000 --width 880 --height 120 --format png -o "$tmp/ramp" -q
 cp "$tmp/ramp.png" "$img/pq-ramp.png"
-"$hdrd" pattern clipping --mode hdr10 --peak 10000 --level 1000 --width 720 --height 160 --format png -o "$tmp/clip" -q
+"$hdrd" pattern clipping --mode hdr10 --peak 1000 --width 720 --height 160 --format png -o "$tmp/clip" -q
 cp "$tmp/clip.png" "$img/clipping-1000.png"
 if [ -f "$shared/fixtures/exr/Desk.exr" ]; then
   # Photographic tiles compress poorly: 1/5 of Desk.exr's 644 pixels, five to a row, keeps

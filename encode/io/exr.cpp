@@ -613,6 +613,30 @@ Result<ExrImage> read_exr_bytes(std::span<const std::uint8_t> bytes, const std::
 
 }  // namespace
 
+NonFiniteSamples count_non_finite(const ExrImage& image) {
+  // On the bits: an all-ones exponent is Inf (zero mantissa) or NaN. Branch-free, so the
+  // loops vectorise.
+  NonFiniteSamples n;
+  if (image.holds_half()) {
+    const std::uint16_t* p = image.half.rgba.data();
+    for (std::size_t i = 0, e = image.half.rgba.size(); i < e; ++i) {
+      const unsigned m = (i & 3) == 3 ? 0u : p[i] & 0x7fffu;  // alpha is not encoded
+      n.nan += m > 0x7c00u;
+      n.inf += m == 0x7c00u;
+    }
+    return n;
+  }
+  const float* p = image.image.rgba.data();
+  for (std::size_t i = 0, e = image.image.rgba.size(); i < e; ++i) {
+    std::uint32_t b;
+    std::memcpy(&b, p + i, 4);
+    const std::uint32_t m = (i & 3) == 3 ? 0u : b & 0x7fffffffu;
+    n.nan += m > 0x7f800000u;
+    n.inf += m == 0x7f800000u;
+  }
+  return n;
+}
+
 // The whole file is read into memory first: the header pre-scan needs the file size and
 // the compressed file is small next to the decoded float image.
 Result<ExrImage> read_exr(const fs::path& path, const ExrReadOptions& options) {

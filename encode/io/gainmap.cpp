@@ -30,10 +30,6 @@ Result<void> check_inputs(const EncodedFrame& sdr, const EncodedFrame& hdr, cons
   if (sdr.width != hdr.width || sdr.height != hdr.height)
     return gain_error("size", fmt::format("the SDR rendition is {}x{} but the HDR rendition {}x{}", sdr.width, sdr.height,
                                           hdr.width, hdr.height));
-  if (!(hdr.target.peak_nits > hdr.target.paper_white_nits))
-    return gain_error("headroom", fmt::format("HDR peak {} cd/m2 leaves no headroom over paper white {} cd/m2",
-                                              hdr.target.peak_nits, hdr.target.paper_white_nits),
-                      "display.peak_nits");
   if (o.gain_map_scale < 1 || o.gain_map_scale > 16)
     return gain_error("options", fmt::format("gain map scale {} is outside 1..16", o.gain_map_scale), "gainmap.scale");
   if (!(o.gamma > 0 && o.gamma <= 16))
@@ -138,6 +134,7 @@ LogGains log_gains(const EncodedFrame& sdr, std::span<const std::uint8_t> sdr_rg
 // Rounded to what the metadata can say exactly (1e-6: the ISO 21496-1 fractions below), so
 // the map is encoded with the very numbers a decoder reads back.
 double carried(double v) { return std::round(v * 1e6) / 1e6; }
+constexpr double kMinCapacityLog2 = 1e-3;
 
 GainMapMetadata metadata_for(const LogGains& g, const EncodedFrame& hdr, const GainMapOptions& o) {
   GainMapMetadata m;
@@ -146,7 +143,12 @@ GainMapMetadata metadata_for(const LogGains& g, const EncodedFrame& hdr, const G
   m.offset_sdr = carried(o.offset_sdr);
   m.offset_hdr = carried(o.offset_hdr);
   m.hdr_capacity_min_log2 = 0;  // the base is the SDR rendition: no headroom needed
-  m.hdr_capacity_max_log2 = carried(std::log2(hdr.target.peak_nits / hdr.target.paper_white_nits));
+  // A peak at or below paper white (which follows a lower peak, or is clipped there: the
+  // rule every output shares, encode/display_target.hpp paper_white_note) has no headroom:
+  // the HDR rendition is the SDR one, and the capacity range keeps the smallest step the
+  // metadata's weight (ISO 21496-1 §5.2.5, a division by max - min) is defined for.
+  m.hdr_capacity_max_log2 =
+      carried(std::max(std::log2(hdr.target.peak_nits / hdr.target.paper_white_nits), kMinCapacityLog2));
   for (int c = 0; c < g.channels; ++c) {
     float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
     for (std::size_t i = static_cast<std::size_t>(c); i < g.log2_gain.size(); i += static_cast<std::size_t>(g.channels)) {

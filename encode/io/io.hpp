@@ -52,6 +52,15 @@ struct ExrImage {
   int height() const { return holds_half() ? half.height : image.height; }
 };
 
+// Non-finite samples of an EXR's R, G and B (alpha is not encoded): NaN and +-Inf counted
+// apart. The encoder's rule (docs/encoding.md) makes NaN 0 and +-Inf the largest light,
+// which the tone curve takes to the peak; the frame job warns and records the counts.
+struct NonFiniteSamples {
+  std::uint64_t nan = 0, inf = 0;
+  std::uint64_t total() const { return nan + inf; }
+};
+NonFiniteSamples count_non_finite(const ExrImage& image);
+
 struct ExrReadOptions {
   // Half files decode straight into ExrImage::half (what SceneInput::half takes): no
   // float conversion, half the memory; files with any float or uint channel still give `image`.

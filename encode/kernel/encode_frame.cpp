@@ -381,8 +381,8 @@ void stage_encode(const FrameJob& job, int y, int x0, int n, float* row, Content
     const float bias = dither ? bayer_row[(x0 + x) & 7] * (1.0f / 64.0f) + (0.5f / 64.0f) : 0.5f;
     int code[3];
     for (int c = 0; c < 3; ++c) {
-      const float v = std::clamp(e[c], 0.0f, 1.0f);
-      code[c] = std::clamp(static_cast<int>(v * s.code_scale + s.code_offset + bias), 0, s.max_code);
+      const float v = std::clamp(e[c], 0.0f, s.signal_max);
+      code[c] = std::clamp(static_cast<int>(v * s.code_scale + s.code_offset + bias), 0, s.peak_code);
       if (s16) {
         const float v16 = narrow ? code[c] * kernel::kCode10To16 : v * kernel::kMax16;
         s16[x * 3 + c] = static_cast<std::uint16_t>(std::lround(v16));
@@ -577,7 +577,8 @@ std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
                job.sig->codes.shift()};
   r.code_scale = job.sig->code_scale;
   r.code_offset = job.sig->code_offset;
-  r.max_code = job.sig->max_code;
+  r.max_code = job.sig->peak_code;
+  r.signal_max = job.sig->signal_max;
   r.narrow = job.sig->code_offset != 0;
   r.code_to_nits = t.mode == Mode::hdr10 ? job.sig->code_to_nits.data() : nullptr;
   if (r.code_to_nits && !job.sig->code_nits_poly.empty()) r.code_nits_poly = job.sig->code_nits_poly.data();

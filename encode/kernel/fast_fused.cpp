@@ -450,7 +450,7 @@ HWY_INLINE void FusedRowLocal(const Spec& spec, FusedRow& r) {
           const VF k16 = hn::Set(df, kernel::kMax16), half = hn::Set(df, 0.5f);
           auto s16 = [&](VF v, hn::Vec<DI> c) {
             const VF u = r.narrow ? hn::MulAdd(hn::ConvertTo(df, c), hn::Set(df, kernel::kCode10To16), half)
-                                  : hn::MulAdd(e_of(v), k16, half);
+                                  : hn::MulAdd(hn::Min(e_of(v), hn::Set(df, r.signal_max)), k16, half);
             return hn::DemoteTo(du16, hn::ConvertTo(di, u));
           };
           hn::StoreInterleaved3(s16(R, cr), s16(G, cg), s16(B, cb), du16,

@@ -57,7 +57,8 @@ struct FusedRow {
   LutView signal;                      // nits -> E' (PNG samples; codes when `codes` is null)
   QuantView codes;                     // nits -> code, exact
   float code_scale = 1023, code_offset = 0;
-  int max_code = 1023;
+  int max_code = 1023;                 // SignalStage::peak_code: no code above the peak
+  float signal_max = 1.0f;             // SignalStage::signal_max (16-bit PNG samples)
   bool narrow = false;
   std::uint8_t* out = nullptr;         // row start
   std::uint16_t* signal16 = nullptr;   // row start or null

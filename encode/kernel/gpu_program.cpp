@@ -35,11 +35,11 @@ constexpr const char* kBlock = R"(layout(std140, binding = 3) uniform HdrdEncode
   vec4 levels;      // paper_white, peak, code_scale, code_offset
   vec4 tone_range;  // tone_lo, tone_hi_prev, tone_hi, signal_lo
   vec4 misc;        // signal_hi_prev, hlg_peak, hlg_gamma, ui_dim
-  uvec4 bases;      // tone_base, signal_base, max_code, lift_base
+  uvec4 bases;      // tone_base, signal_base, max_code (the peak's code), lift_base
   vec4 ui_place;    // ui_x0, ui_y0, ui_scale, gamut_lo
   ivec4 ui_size;    // ui_w, ui_h, -, -
   vec4 toes;        // tone_zero, tone_toe_slope, lift_zero, lift_toe_slope
-  vec4 lift_range;  // lift_lo, lift_hi_prev, -, -
+  vec4 lift_range;  // lift_lo, lift_hi_prev, signal_max, -
 } hdrd_u;
 )";
 
@@ -172,7 +172,8 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   u.peak = static_cast<float>(t.peak_nits);
   u.code_scale = sig.code_scale;
   u.code_offset = sig.code_offset;
-  u.max_code = static_cast<std::uint32_t>(sig.max_code);
+  u.max_code = static_cast<std::uint32_t>(sig.peak_code);  // no code above the peak
+  u.signal_max = sig.signal_max;
   u.hlg_peak = sig.hlg_peak;
   u.hlg_gamma = sig.hlg_gamma;
   u.gamut_lo = detail::gamut_low(t);
@@ -283,7 +284,7 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
     if (s.png_samples) {
       g += t.range == Range::narrow
                ? "  uvec3 s16 = uvec3(vec3(code) * kCode10To16 + 0.5);\n"
-               : "  uvec3 s16 = uvec3(e * kMax16 + 0.5);\n";
+               : "  uvec3 s16 = uvec3(min(e, vec3(hdrd_u.lift_range.z)) * kMax16 + 0.5);\n";
       g += "  return uvec4(word, s16.r | (s16.g << 16), s16.b, 0u);\n}\n";
       prog.target_format = TargetFormat::rgba32ui;
     } else {

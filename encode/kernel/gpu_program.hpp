@@ -37,7 +37,7 @@ struct alignas(16) EncodeUniforms {
   float ui_x0, ui_y0, ui_scale, gamut_lo;
   std::int32_t ui_w, ui_h, pad1, pad2;
   float tone_zero, tone_toe_slope, lift_zero, lift_toe_slope;  // ToneStage's toes
-  float lift_lo, lift_hi_prev, pad3, pad4;
+  float lift_lo, lift_hi_prev, signal_max, pad4;  // signal_max: SignalStage's (PNG samples)
 };
 
 struct Table {

@@ -53,6 +53,14 @@ struct SignalStage {
   FloatBitsQuantizer codes;         // nits -> code, exact (not HLG, whose signal is not of nits alone)
   float code_scale = 1023, code_offset = 0;  // code = E' * scale + offset (before rounding)
   int max_code = 1023;
+  // No code decodes above the display peak (ST 2086: the content's light stays within the
+  // mastering display's maximum): the largest code whose decoded light is at most the peak,
+  // where every path clamps (rounding to the nearest code put half of all integer PQ peaks
+  // a code above: 150 cd/m2 gave code 577 = 150.9 cd/m2). max_code for transfers whose top
+  // signal is the peak (SDR, HLG). signal_max: the same for the 16-bit full-range PNG
+  // samples, round(E' 65535) <= the largest sample at or below the peak.
+  int peak_code = 1023;
+  float signal_max = 1.0f;
   float hlg_peak = 1000, hlg_gamma = 1.2f;
   transfer::HlgDisplay hlg;         // hlg: the display model the codes are for
   std::vector<float> code_to_nits;  // for MaxCLL/MaxFALL: decoded display light per code (hlg: scene light)
@@ -73,6 +81,15 @@ inline float hlg_ootf_gain(const SignalStage& s, float er, float eg, float eb) {
   const float ys = kernel::rec2020_luminance(er, eg, eb);
   return ys > 0 ? s.hlg_peak * std::pow(ys, s.hlg_gamma - 1) : 0.0f;
 }
+
+// The largest code (at the target's depth and range) and the largest 16-bit full-range PNG
+// sample whose light is at most the peak (SignalStage::peak_code, signal_max): ST 2084
+// decoded per code; for SDR and HLG, whose top signal is the peak, the top code.
+struct PeakCodes {
+  int code = 1023;
+  int signal16 = 65535;
+};
+PeakCodes peak_codes(const DisplayTarget& t);
 
 ToneStage build_tone_stage(const PreparedPipeline& p);
 SignalStage build_signal_stage(const DisplayTarget& t);

@@ -189,6 +189,10 @@ Result<EncoderConfig> encoder_config(const VideoSettings& s, const StreamInfo& s
   } else if (c.encoder == "libsvtav1") {
     c.options["preset"] = preset;
     c.options["crf"] = fmt::format("{}", static_cast<int>(crf));
+    // FFmpeg 5.1's wrapper passes a frame's pict_type I on as EB_AV1_KEY_PICTURE, but SVT-AV1
+    // 1.4 honours it only with enable-force-key-frames (without it a 5-scene sequence had one
+    // keyframe, frame 0): so every scene cut is a keyframe, as with x265 and libaom.
+    c.options["svtav1-params"] = "enable-force-key-frames=1";
   } else {  // libaom-av1
     c.options["cpu-used"] = preset;
     c.options["row-mt"] = "1";

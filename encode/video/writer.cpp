@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -150,6 +151,10 @@ struct SequenceWriter::Impl {
   PacketPtr packet;
   FilePtr spool;
   int frames = 0;
+  // Frames asked to be keyframes and the pts of the key packets the encoder made: a request
+  // it did not honour is said in VideoResult::warnings (scene cuts a player cannot seek to).
+  std::vector<std::int64_t> requested_keyframes;
+  std::set<std::int64_t> key_pts;
   ContentLightLevel frames_light;  // from EncodedFrame::content_light, when no metadata is given
   double convert_ms = 0, encoder_ms = 0, mux_ms = 0;  // wall time in each stage (VideoResult)
   double convert_cpu_ms = 0;
@@ -194,6 +199,7 @@ struct SequenceWriter::Impl {
       if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return {};
       if (rc < 0) return av_fail("video.encoder", fmt::format("{} failed", config.encoder), rc);
       SpoolRecord r{packet->pts, packet->dts, packet->duration, packet->flags, static_cast<std::uint32_t>(packet->size)};
+      if (packet->flags & AV_PKT_FLAG_KEY) key_pts.insert(packet->pts);
       const bool ok = std::fwrite(&r, sizeof r, 1, spool.get()) == 1 &&
                       std::fwrite(packet->data, 1, static_cast<std::size_t>(packet->size), spool.get()) ==
                           static_cast<std::size_t>(packet->size);
@@ -229,6 +235,7 @@ struct SequenceWriter::Impl {
     convert_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
     frame->pts = frames;
     frame->pict_type = o.keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
+    if (o.keyframe) requested_keyframes.push_back(frames);
     if (const int rc = lav::avcodec_send_frame(enc.get(), frame.get()); rc < 0)
       return av_fail("video.encoder", fmt::format("{} refused frame {}", config.encoder, frames), rc);
     frames_light.max_cll_nits = std::max(frames_light.max_cll_nits, f.content_light.max_cll_nits);
@@ -576,6 +583,15 @@ VideoResult SequenceWriter::Impl::result(const SequenceMetadata* meta, const io:
   v.bytes = fs::file_size(output, ec);
   if (is_hdr(stream.target.mode)) v.content_light = ContentLightLevel{static_cast<double>(cll.max_cll), static_cast<double>(cll.max_fall)};
   v.hdr10plus = meta && settings.dynamic_metadata && meta->has_dynamic_metadata() && settings.codec != Codec::h264;
+  std::string missed;
+  int missed_count = 0;
+  for (const std::int64_t f : requested_keyframes)
+    if (!key_pts.count(f) && ++missed_count <= 8) missed += (missed.empty() ? "" : ", ") + std::to_string(f);
+  if (missed_count > 0)
+    v.warnings.push_back(fmt::format("{} made no keyframe at {} of the {} frames asked for (scene starts): frame{} {}{}; "
+                                     "a player seeking there starts at an earlier keyframe",
+                                     config.encoder, missed_count, requested_keyframes.size(), missed_count == 1 ? "" : "s",
+                                     missed, missed_count > 8 ? ", ..." : ""));
   return v;
 }
 

@@ -26,6 +26,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -90,6 +91,9 @@ struct VideoResult {
   std::uint64_t bytes = 0;
   std::optional<ContentLightLevel> content_light;  // carried values (whole cd/m2), HDR only
   bool hdr10plus = false;     // HDR10+ in every frame
+  // What the user should know about the stream (in the sequence sidecar's and the job's
+  // warnings, not in to_json): a keyframe asked for that the encoder did not make.
+  std::vector<std::string> warnings;
   // Wall time in hdrd's R'G'B' -> Y'CbCr conversion, in the encoder's calls (its own
   // threads run beside them) and in the final mux; not in to_json (the bytes' description).
   double convert_ms = 0, encoder_ms = 0, mux_ms = 0;

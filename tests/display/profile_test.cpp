@@ -64,8 +64,9 @@ TEST(Profile, EveryFixtureFollowsTheModeAndLuminanceRules) {
     if (usable) {
       EXPECT_NEAR(p.peak_nits, max.get<double>(), 1e-9);
     } else if (p.is_hdr() && e["displayid_display_parameters"].is_null()) {
-      EXPECT_EQ(p.peak_nits, kFallbackHdrPeakNits);
-      EXPECT_TRUE(has_note(p, "falls back to 1000")) << p.notes.size();
+      // The fallbacks of the panel class (Profile.UnusableMaxFallsBackToWhatThePanelImplies).
+      EXPECT_TRUE(p.peak_nits == kFallbackHdrPeakNits || p.peak_nits == kFallbackBt709MonitorPeakNits) << p.peak_nits;
+      EXPECT_TRUE(has_note(p, "no usable max luminance")) << p.notes.size();
     }
     EXPECT_LE(p.frame_average_nits, p.peak_nits);
     EXPECT_LT(p.black_nits, p.peak_nits);
@@ -92,12 +93,57 @@ Profile profile_of_category(const std::string& category) {
 
 TEST(Profile, AbsurdMaxLuminanceFallsBack) {
   if (!manifest().is_object()) GTEST_SKIP() << "shared fixture missing";
-  const Profile p = profile_of_category("hdr:bogus_max_cv255");  // claims 12525.7 cd/m2
+  // DELL U2718Q claims 12525.7 cd/m2 (CV 255, frame-average too); a 61 cm monitor with
+  // BT.709 primaries (edid-decode: red 0.6396, 0.3300, ...) is DisplayHDR 400 class (the
+  // panel is specified at 400 cd/m2), not the 1000 cd/m2 it fell back to.
+  const Profile p = profile_of_category("hdr:bogus_max_cv255");
   EXPECT_EQ(p.mode, Mode::hdr10);
-  EXPECT_EQ(p.peak_nits, 1000.0);
-  EXPECT_EQ(p.frame_average_nits, 1000.0);  // its frame-average is the same bogus value
-  EXPECT_EQ(p.black_nits, 0.0);             // min CV 0 is 0 whatever the max
+  EXPECT_EQ(p.peak_nits, 400.0);
+  EXPECT_EQ(p.frame_average_nits, 400.0);  // its frame-average is the same bogus value
+  EXPECT_EQ(p.black_nits, 0.0);            // min CV 0 is 0 whatever the max
   EXPECT_TRUE(has_note(p, "12525.722 cd/m2) is not a plausible display peak"));
+  EXPECT_TRUE(has_note(p, "no usable max luminance: peak falls back to 400 cd/m2, the VESA DisplayHDR 400 class of a 61 cm"));
+}
+
+// Held-out synthetic EDIDs (tests/display/edid_builder.hpp): an HDR10 panel whose block max
+// is unusable takes the peak its other fields and its class imply, in this order, and a
+// note names the reason.
+TEST(Profile, UnusableMaxFallsBackToWhatThePanelImplies) {
+  using namespace hdrd::display::testing;
+  auto edid = [](std::uint8_t max_cv, std::uint8_t fall_cv, int width_cm, const std::string& name, bool wide) {
+    auto b = base_block(1);
+    b[21] = static_cast<std::uint8_t>(width_cm);
+    b[22] = width_cm ? 34 : 0;
+    std::string n = name.substr(0, 13);
+    if (n.size() < 13) n += "\n" + std::string(12 - n.size(), ' ');
+    std::copy(n.begin(), n.end(), b.begin() + 72 + 5);
+    if (wide) {
+      const std::uint16_t p3[8] = {696, 328, 271, 707, 154, 61, 320, 337};  // P3-D65 in 1/1024
+      set_chromaticity(b, p3);
+    }
+    const Block hdr = cta_extended(0x06, {0x05, 0x01, max_cv, fall_cv, 0});  // SDR + PQ, type 1
+    const Block colorimetry = cta_extended(0x05, {0x80, 0x00});             // BT2020RGB
+    return profile_from_edid(assemble({b, cta_block({hdr, colorimetry})})).value();
+  };
+  // CV 255 max but a plausible frame-average (CV 96: 50 x 2^3 = 400): the peak is at least that.
+  const Profile fall = edid(255, 96, 60, "Test Panel", false);
+  ASSERT_EQ(fall.mode, Mode::hdr10);
+  EXPECT_DOUBLE_EQ(fall.peak_nits, 400.0);
+  EXPECT_TRUE(has_note(fall, "from the desired content max frame-average luminance"));
+  // Both bogus; the name states a DisplayHDR tier.
+  const Profile tier = edid(255, 255, 60, "DisplayHDR600", true);
+  EXPECT_EQ(tier.peak_nits, 600.0);
+  EXPECT_TRUE(has_note(tier, "VESA DisplayHDR 600 class"));
+  EXPECT_EQ(edid(0, 0, 60, "M27 HDR1000", false).peak_nits, 1000.0);
+  // A BT.709-class monitor: DisplayHDR 400.
+  const Profile monitor = edid(255, 255, 60, "Test Panel", false);
+  EXPECT_EQ(monitor.peak_nits, 400.0);
+  EXPECT_TRUE(has_note(monitor, "BT.709-class gamut"));
+  // A wide-gamut monitor, or a panel of unknown or TV size: hdrd's HDR default.
+  EXPECT_EQ(edid(255, 255, 60, "Test Panel", true).peak_nits, 1000.0);
+  EXPECT_EQ(edid(255, 255, 0, "Test Panel", false).peak_nits, 1000.0);
+  EXPECT_EQ(edid(255, 255, 140, "Test Panel", false).peak_nits, 1000.0);
+  EXPECT_TRUE(has_note(edid(255, 255, 140, "Test Panel", false), "falls back to 1000 cd/m2"));
 }
 
 TEST(Profile, NoLuminanceBytesFallsBack) {

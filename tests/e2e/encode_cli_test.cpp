@@ -8,7 +8,10 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
+#include <sstream>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "encode/io/io.hpp"
@@ -234,6 +237,82 @@ TEST(EncodeCli, HelpHasExamplesAndTonemapListsTheRegistry) {
   ASSERT_EQ(l.exit_code, 0);
   const auto j = nlohmann::json::parse(l.out);
   EXPECT_GE(j.size(), 15u);
+}
+
+
+// docs/dump-format.md §5's key table and the keys a real sidecar holds agree both ways
+// (`sdr_content_eotf` was written but not documented). The sidecars: hdr10 and hlg (whose
+// `hlg_system_gamma` only it has) and sdr, from `hdrd encode`.
+std::set<std::string> documented_sidecar_keys() {
+  const std::string doc = hdrd::testing::read_file(hdrd::testing::source_dir() / "docs/dump-format.md");
+  const auto section = doc.find("## 5. The JSON sidecar");
+  EXPECT_NE(section, std::string::npos);
+  const auto table = doc.find("| key | type | meaning |", section);
+  EXPECT_NE(table, std::string::npos);
+  std::set<std::string> keys;
+  std::istringstream lines(doc.substr(table));
+  std::string line;
+  std::getline(lines, line);  // header
+  std::getline(lines, line);  // |---|
+  while (std::getline(lines, line) && line.starts_with("|")) {
+    const std::string cell = line.substr(1, line.find('|', 1) - 1);
+    for (std::size_t a = cell.find('`'); a != std::string::npos; a = cell.find('`', a + 1)) {
+      const std::size_t b = cell.find('`', a + 1);
+      if (b == std::string::npos) break;
+      keys.insert(cell.substr(a + 1, b - a - 1));
+      a = b;
+    }
+  }
+  return keys;
+}
+
+TEST(EncodeCli, DumpFormatKeyTableMatchesTheSidecar) {
+  TempDir tmp;
+  write_input(tmp / "in.exr", held_out_colours(16, 3));
+  std::set<std::string> written;
+  for (const char* mode : {"hdr10", "hlg", "sdr"}) {
+    const auto r = run_command(hdrd() + " encode " + (tmp / "in.exr").string() + " -o " + (tmp / mode).string() +
+                               " --format raw -q --mode " + mode);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = nlohmann::json::parse(hdrd::testing::read_file(tmp / (std::string(mode) + ".json")));
+    for (const auto& item : j.items()) written.insert(item.key());
+  }
+  const std::set<std::string> documented = documented_sidecar_keys();
+  // Documented as present only in some builds.
+  const std::set<std::string> conditional = {"hdrd_version"};
+  for (const auto& k : written) EXPECT_TRUE(documented.count(k)) << "sidecar key '" << k << "' is not in docs/dump-format.md §5";
+  for (const auto& k : documented)
+    EXPECT_TRUE(written.count(k) || conditional.count(k)) << "docs/dump-format.md §5 names '" << k << "', which no sidecar has";
+}
+
+// Issue 29 item 12: `hdrd encode` of BrightRingsNanInf.exr counts its non-finite samples
+// (OpenImageIO's counts in the fixtures' reference_stats.json: per channel 2 NaN and 4 Inf),
+// warns (the summary's notes) and records them in the sidecar; a clean file records zeros, no warning.
+TEST(EncodeCli, NonFiniteInputSamplesAreCountedAndWarned) {
+  HDRD_REQUIRE_FIXTURE(exr, "fixtures/exr/BrightRingsNanInf.exr");
+  HDRD_REQUIRE_FIXTURE(stats_file, "fixtures/exr/reference_stats.json");
+  std::uint64_t nan = 0, inf = 0;
+  for (const auto& img : nlohmann::json::parse(hdrd::testing::read_file(stats_file))["images"])
+    if (img["file"] == "exr/BrightRingsNanInf.exr")
+      for (int c = 0; c < 3; ++c) nan += img["stats_nancount"][c].get<std::uint64_t>(), inf += img["stats_infcount"][c].get<std::uint64_t>();
+  ASSERT_GT(nan + inf, 0u);
+  TempDir tmp;
+  const auto r = run_command(hdrd() + " encode " + exr.string() + " -o " + (tmp / "o").string() + " --format raw");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string want = fmt::format("input has {} non-finite R, G, B samples ({} NaN, {} infinite)", nan + inf, nan, inf);
+  EXPECT_NE((r.out + r.err).find(want), std::string::npos) << r.out << r.err;  // the summary's notes
+  const auto j = nlohmann::json::parse(hdrd::testing::read_file(tmp / "o.json"));
+  EXPECT_EQ(j["settings"]["input"]["non_finite_samples"], (nlohmann::json{{"nan", nan}, {"inf", inf}}));
+  bool warned = false;
+  for (const auto& w : j["warnings"]) warned |= w.get<std::string>().find(want) != std::string::npos;
+  EXPECT_TRUE(warned);
+
+  write_input(tmp / "clean.exr", held_out_colours(8, 5));
+  const auto c = run_command(hdrd() + " encode " + (tmp / "clean.exr").string() + " -o " + (tmp / "c").string() + " --format raw");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ((c.out + c.err).find("non-finite"), std::string::npos);
+  EXPECT_EQ(nlohmann::json::parse(hdrd::testing::read_file(tmp / "c.json"))["settings"]["input"]["non_finite_samples"],
+            (nlohmann::json{{"nan", 0}, {"inf", 0}}));
 }
 
 }  // namespace

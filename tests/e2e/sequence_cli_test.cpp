@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -122,6 +123,62 @@ TEST(SequenceCli, LosslessHevcCarriesTheDumpsYPrimeAndItsTags) {
       worst = std::max(worst, std::abs(got - expected));
     }
     EXPECT_LE(worst, 1) << "frame " << i << ": decoded Y' off the equations by " << worst << " codes";
+  }
+}
+
+// Issue 29 item 4: SDR video is tagged BT.709 (transfer 1, BT.1886 display) by default, as
+// players expect, not sRGB (13); --sdr-video-transfer srgb keeps 13. ffprobe reads the tags.
+TEST(SequenceCli, SdrVideoIsBt709ByDefault) {
+  if (!have("ffprobe")) GTEST_SKIP() << "ffprobe missing (apt-get install ffmpeg)";
+  TempDir d;
+  write_shots(d.path(), 3);
+  const std::pair<const char*, const char*> cases[] = {{"", "bt709"}, {" --sdr-video-transfer srgb", "iec61966-2-1"}};
+  for (const auto& [flag, want] : cases) {
+    const fs::path out = d / "sdr";
+    const auto r = run_command(fmt::format("'{}' encode '{}' --mode sdr --video hevc --preset ultrafast --format raw "
+                                           "-o '{}' --json -q{}",
+                                           hdrd(), (d / "s.%d.exr").string(), out.string(), flag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json probe = ffprobe(d / "sdr.mp4");
+    ASSERT_EQ(probe["streams"].size(), 1u);
+    EXPECT_EQ(probe["streams"][0]["color_transfer"], want) << flag;
+    EXPECT_EQ(probe["streams"][0]["color_primaries"], "bt709");
+    const json sidecar = json::parse(r.out);
+    EXPECT_EQ(sidecar["video"]["transfer_characteristics"], std::string(want) == "bt709" ? 1 : 13) << flag;
+    const json frame = json::parse(hdrd::testing::read_file(d / "sdr.00000.json"));
+    EXPECT_EQ(frame["transfer"], std::string(want) == "bt709" ? "bt1886" : "srgb") << flag;
+  }
+}
+
+// Issue 29 item 5: a keyframe at every detected scene cut with the default AV1 encoder
+// (SVT-AV1, which ignored the request: one keyframe, frame 0), libaom and HEVC alike. Five
+// scenes of three 64x64 frames, 4 stops apart; ffprobe's key_frame flags against the
+// sidecar's scenes.
+TEST(SequenceCli, EveryVideoEncoderPutsAKeyframeAtEverySceneCut) {
+  if (!have("ffprobe")) GTEST_SKIP() << "ffprobe missing (apt-get install ffmpeg)";
+  TempDir d;
+  const double gains[5] = {1, 16, 1, 16, 1};
+  for (int i = 0; i < 15; ++i) {
+    hdrd::Image img(64, 64);
+    for (std::size_t p = 0; p < img.pixel_count(); ++p)
+      for (int c = 0; c < 3; ++c)
+        img.rgba[p * 4 + c] = static_cast<float>(gains[i / 3] * (0.05 + 0.9 * static_cast<double>(p % 64) / 64) * (c + 1) / 3);
+    ASSERT_TRUE(hdrd::io::write_exr(d / fmt::format("c.{}.exr", i), img, {}).ok());
+  }
+  const char* encoders[] = {"--video av1", "--video av1 --av1-encoder libaom-av1 --preset 8", "--video hevc --preset ultrafast"};
+  for (const char* enc : encoders) {
+    SCOPED_TRACE(enc);
+    const auto r = run_command(fmt::format("'{}' encode '{}' --mode hdr10 {} --format raw -o '{}' --json -q", hdrd(),
+                                           (d / "c.%d.exr").string(), enc, (d / "v").string()));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json sidecar = json::parse(r.out);
+    std::set<int> starts;
+    for (const auto& s : sidecar["scenes"]) starts.insert(s["first_frame"].get<int>());
+    ASSERT_EQ(starts, (std::set<int>{0, 3, 6, 9, 12})) << sidecar["scenes"];
+    const json probe = ffprobe(d / "v.mp4");
+    ASSERT_EQ(probe["frames"].size(), 15u);
+    for (int i = 0; i < 15; ++i)
+      if (starts.count(i)) EXPECT_EQ(probe["frames"][i]["key_frame"], 1) << "frame " << i << " starts a scene";
   }
 }
 

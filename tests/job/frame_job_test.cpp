@@ -214,6 +214,80 @@ TEST(FrameJob, GainMapPrimaryIsTheSdrRequestsFrame) {
   EXPECT_EQ(sidecar["files"]["avif"], "hdr.avif");
 }
 
+// Issue 29 item 7: one rule for a peak below paper white, the same in every output. The
+// default paper white follows the peak (a warning says so) and every output is written,
+// the gain-map JPEG included (it refused these settings); one asked for above the peak is
+// kept, with a warning that it is clipped.
+TEST(FrameJob, PaperWhiteFollowsALowerPeakInEveryOutput) {
+  Inputs in;
+  auto run = [&](const char* body) {
+    auto r = parse_request_json(json::parse(body), cli_context(Source::encode));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    EncodeInput input;
+    input.path = in.exr;
+    auto job = FrameJob::create(std::move(*r), {}, input);
+    EXPECT_TRUE(job.ok()) << job.error().message;
+    return run_frame_job(**job);
+  };
+  auto has = [](const std::vector<std::string>& ws, const char* what) {
+    for (const auto& w : ws)
+      if (w.find(what) != std::string::npos) return true;
+    return false;
+  };
+  for (const char* mode : {"hdr10", "hlg"}) {
+    auto result = run(fmt::format(R"({{"display":{{"mode":"{}","peak_nits":150}},"formats":["png","raw","jpeg-gainmap","avif"]}})",
+                                  mode)
+                          .c_str());
+    ASSERT_TRUE(result.ok()) << mode << ": " << result.error().message;
+    EXPECT_EQ(result->frame.target.paper_white_nits, 150) << mode;
+    EXPECT_EQ(result->frame.target.ui_white_nits, 150) << mode;
+    EXPECT_EQ(result->files.size(), 4u) << mode;
+    EXPECT_TRUE(has(result->warnings, "paper white follows the peak")) << mode;
+  }
+  auto asked = run(R"({"display":{"mode":"hdr10","peak_nits":150,"paper_white_nits":203},"formats":["raw"]})");
+  ASSERT_TRUE(asked.ok()) << asked.error().message;
+  EXPECT_EQ(asked->frame.target.paper_white_nits, 203);
+  EXPECT_TRUE(has(asked->warnings, "clipped at the peak"));
+  auto plain = run(R"({"display":{"mode":"hdr10","peak_nits":1000},"formats":["raw"]})");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_FALSE(has(plain->warnings, "paper white"));
+}
+
+// Issue 29 item 3: with the Hisense EDID (native white (0.2822, 0.2969), HLG only) the
+// mastering display's white is D65, the white hdrd's frames are graded in (ST 2086), its
+// primaries the panel's; forcing hdr10 on that HLG-only display warns.
+TEST(FrameJob, MasteringWhiteIsD65AndForcedUnsignalledModesWarn) {
+  HDRD_REQUIRE_FIXTURE(edid, "fixtures/edid/HEC002F_9A8CD18D45A1.bin");
+  Inputs in;
+  auto run = [&](const std::string& mode) {
+    const std::string body = fmt::format(R"({{"display":{{{}"edid":"{}"}},"formats":["png"]}})",
+                                         mode.empty() ? "" : "\"mode\":\"" + mode + "\",", edid.string());
+    auto r = parse_request_json(json::parse(body), cli_context(Source::encode));
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    EncodeInput input;
+    input.path = in.exr;
+    auto job = FrameJob::create(std::move(*r), {}, input);
+    EXPECT_TRUE(job.ok()) << job.error().message;
+    return run_frame_job(**job);
+  };
+  auto warned = [](const FrameResult& f) {
+    for (const auto& w : f.warnings)
+      if (w.find("does not signal SMPTE ST 2084 (PQ) (it signals HLG only)") != std::string::npos) return true;
+    return false;
+  };
+  for (const char* mode : {"", "hdr10"}) {
+    auto f = run(mode);
+    ASSERT_TRUE(f.ok()) << f.error().message;
+    const auto& m = f->frame.mastering;
+    EXPECT_EQ(m.primaries.white.x, 0.3127) << mode;
+    EXPECT_EQ(m.primaries.white.y, 0.3290) << mode;
+    EXPECT_NEAR(m.primaries.red.x, 0.6396, 1e-3) << "the primaries stay the panel's";
+    const json side = f->sidecar();
+    EXPECT_EQ(side["mastering_display"]["primaries"]["white"], json::array({0.3127, 0.329}));
+    EXPECT_EQ(warned(*f), std::string(mode) == "hdr10") << mode;
+  }
+}
+
 TEST(FrameJob, StillsAreRefusedWhereTheModeHasNoForm) {
   auto create = [](const char* body) {
     auto r = parse_request_json(json::parse(body), cli_context(Source::pattern));

@@ -40,6 +40,8 @@ TEST_P(DisplayModes, EveryCheckPasses) {
 INSTANTIATE_TEST_SUITE_P(Modes, DisplayModes,
                          ::testing::Values(ModeCase{"sdr_srgb", "--mode sdr-srgb"},
                                            ModeCase{"sdr_bt1886", "--mode sdr-bt1886"},
+                                           ModeCase{"hdr10_150", "--mode hdr10 --peak 150"},
+                                           ModeCase{"hdr10_426_856", "--mode hdr10 --peak 426.856"},
                                            ModeCase{"hdr10_400", "--mode hdr10 --peak 400"},
                                            ModeCase{"hdr10_600", "--mode hdr10 --peak 600"},
                                            ModeCase{"hdr10_1000", "--mode hdr10 --peak 1000"},

@@ -12,6 +12,7 @@
 #include "patterns/decode.hpp"
 #include "patterns/font.hpp"
 #include "patterns/patterns.hpp"
+#include "patterns/selftest.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace hdrd::patterns {
@@ -118,25 +119,61 @@ TEST(PqRamp, LabelsAreDrawnInTheStrip) {
   EXPECT_EQ(lit2, 0);
 }
 
-// HGIG-style clipping: encoded for a display whose peak is P, the squares at or above P
-// equal the background and the ones below stay visible.
-TEST(Clipping, DetailVanishesExactlyAtThePeak) {
+// HGIG-style clipping (issue 29 item 9): the squares default to the display's peak P and are
+// encoded over PQ's full range, so each square has its own code (ST 2084 computed here) and
+// the display, not hdrd, decides which vanish into the 10000 cd/m2 background; the sidecar
+// names the levels. hdrd clipped every square at or above P before (with --level = peak the
+// upper half vanished whatever the display).
+TEST(Clipping, SquaresAreEncodedOverTheSignalsFullRange) {
+  auto pq = [](double nits) {
+    const double m1 = 2610.0 / 16384, m2 = 2523.0 / 4096 * 128, c1 = 3424.0 / 4096, c2 = 2413.0 / 4096 * 32,
+                 c3 = 2392.0 / 4096 * 32;
+    const double y = std::pow(nits / 10000, m1);
+    return std::pow((c1 + c2 * y) / (1 + c3 * y), m2);
+  };
   for (double peak : {600.0, 1000.0}) {
     DisplayTarget t = default_target(Mode::hdr10);
     t.peak_nits = peak;
-    PatternOptions o = small(900, 200);
-    o.level_nits = peak;
-    auto f = make_pattern("clipping", t, o, false);
+    auto f = make_pattern("clipping", t, small(900, 200), false);  // --level unset: the peak
     ASSERT_TRUE(f);
-    const auto squares = f->settings["pattern"]["square_nits"];
+    const auto& desc = f->settings["pattern"];
+    EXPECT_EQ(desc["level_nits"], peak);
+    EXPECT_EQ(desc["display_peak_nits"], peak);
+    EXPECT_EQ(desc["signal_peak_nits"], 10000);
+    EXPECT_EQ(desc["background_nits"], 10000);
+    EXPECT_FALSE(desc.contains("note"));
+    const auto squares = desc["square_nits"];
     ASSERT_EQ(squares.size(), 9u);
-    const int background = code_at(*f, 2, 2);
+    EXPECT_EQ(code_at(*f, 2, 2), 1023);
+    int prev = 0;
     for (int i = 0; i < 9; ++i) {
       const int c = code_at(*f, 50 + 100 * i, 80);
-      if (squares[i].get<double>() >= peak) { EXPECT_EQ(c, background) << squares[i]; }
-      else EXPECT_LT(c, background) << squares[i];
+      EXPECT_NEAR(c, pq(squares[i].get<double>()) * 1023, 0.5 + 1e-9) << squares[i];
+      EXPECT_GT(c, prev) << squares[i];
+      prev = c;
     }
   }
+}
+
+// Issue 29 item 2: the selftest's peak check is "no code decodes above the peak", not
+// "no code above round(PQ(peak))": at 150 cd/m2 that nearest code, 562, decodes to
+// 150.09 cd/m2 (ST 2084 computed here) and must fail; 561 passes.
+TEST(SelftestPeak, NoCodeMayDecodeAboveThePeak) {
+  DisplayTarget t = default_target(Mode::hdr10);
+  t.peak_nits = 150;
+  auto frame = [&](int code) {
+    return frame_from_codes(std::vector<Code3>(4, Code3{code, code, code}), 2, 2, t, false).value();
+  };
+  auto pq_eotf = [](double e) {
+    const double m1 = 2610.0 / 16384, m2 = 2523.0 / 4096 * 128, c1 = 3424.0 / 4096, c2 = 2413.0 / 4096 * 32,
+                 c3 = 2392.0 / 4096 * 32;
+    const double p = std::pow(e, 1 / m2);
+    return 10000 * std::pow(std::max(p - c1, 0.0) / (c2 - c3 * p), 1 / m1);
+  };
+  ASSERT_GT(pq_eotf(562 / 1023.0), 150);
+  ASSERT_LE(pq_eotf(561 / 1023.0), 150);
+  EXPECT_FALSE(check_peak(frame(562), "ramp").passed);
+  EXPECT_TRUE(check_peak(frame(561), "ramp").passed);
 }
 
 TEST(NearBlack, StepsAreDistinctCodesInPq) {

@@ -6,6 +6,7 @@
 
 #include "shading/gpu_encode.hpp"
 #include "tests/shading/render_testing.hpp"
+#include "tests/testing/standards.hpp"
 
 namespace hdrd::shading {
 namespace {
@@ -109,6 +110,56 @@ INSTANTIATE_TEST_SUITE_P(Modes, GpuEncode,
                                            Case{"material-grid", Mode::sdr, 8, ""}, Case{"hdr", Mode::sdr, 10, "hable"},
                                            Case{"underwater", Mode::sdr_bt1886, 8, ""}, Case{"hdr", Mode::scrgb, 16, ""}),
                          case_name);
+
+// Issue 29 item 2 on the GPU path, end to end on llvmpipe: at sampled peaks (every 499th
+// integer from 100 to 10 000, the two that used to carry MaxCLL above the mastering
+// maximum, 150 and 426.856, and 10 000) the brightest code the GPU program writes for light
+// at and above the peak decodes (ST 2084 here, tests/testing/standards.hpp) to at most the
+// peak, its 16-bit PNG samples too, and the carried MaxCLL stays within the mastering
+// maximum. The clip code the program receives is the CPU's (GpuProgram.ClipCodeIsThePeakCode),
+// which PeakCode.ClipCodeAtEveryIntegerPeakInEveryHdrMode checks at every integer peak.
+TEST(GpuEncodePeak, NoCodeDecodesAboveThePeak) {
+  HDRD_REQUIRE_RENDERER(renderer);
+  std::vector<double> peaks{150, 426.856, 10000};
+  for (int p = 100; p <= 10000; p += 499) peaks.push_back(p);
+  for (const Range range : {Range::full, Range::narrow}) {
+    for (const double peak : peaks) {
+      Image img(4, 1);
+      const double nits[4] = {0.999 * peak, peak, 1.001 * peak, 4 * peak};
+      for (int i = 0; i < 4; ++i) {
+        for (int c = 0; c < 3; ++c) img.rgba[static_cast<std::size_t>(i) * 4 + c] = static_cast<float>(nits[i]);
+        img.rgba[static_cast<std::size_t>(i) * 4 + 3] = 1;
+      }
+      SceneInput in;
+      in.image = &img;
+      in.units = InputUnits::absolute;
+      in.white_luminance_nits = 1.0;
+      EncodeSettings s;
+      s.target = default_target(Mode::hdr10);
+      s.target.range = range;
+      s.target.peak_nits = peak;
+      s.target.paper_white_nits = std::min(203.0, peak);
+      s.tone.curve = "clip";
+      s.threads = 1;
+      auto prepared = prepare_pipeline(in, s);
+      ASSERT_TRUE(prepared.ok()) << prepared.error().message;
+      auto encoder = GpuEncoder::create(renderer, *prepared);
+      ASSERT_TRUE(encoder.ok()) << encoder.error().message;
+      auto gpu = (*encoder)->encode_image(img);
+      ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+      const EncodedFrame& f = gpu->frame;
+      int top = 0;
+      for (std::size_t i = 0; i < 4; ++i)
+        for (int c : codes(f, i)) top = std::max(top, c);
+      const double e = range == Range::narrow ? std::clamp((top / 4.0 - 16) / 219, 0.0, 1.0) : top / 1023.0;
+      EXPECT_LE(::hdrd::testing::standard::pq_eotf(e), peak * (1 + 1e-12)) << "peak " << peak << ": code " << top;
+      for (std::uint16_t v : f.signal16)
+        if (range == Range::full) EXPECT_LE(::hdrd::testing::standard::pq_eotf(v / 65535.0), peak * (1 + 1e-12)) << peak;
+      const CarriedLightLevel carried = carried_light_level(f.content_light, f.mastering);
+      EXPECT_LE(carried.max_cll_nits, f.mastering.max_nits) << "peak " << peak;
+    }
+  }
+}
 
 }  // namespace
 }  // namespace hdrd::shading

@@ -203,7 +203,8 @@ constexpr Spec kPattern{
     "  hdrd pattern bt2111 --mode hdr10 -o out/bars-pq        (ITU-R BT.2111-2, narrow range)\n"
     "  hdrd pattern bt2111 --mode hlg -o out/bars-hlg\n"
     "  hdrd pattern window --mode hdr10 --peak 1000 --level 1000 --area 10 -o out/win10\n"
-    "  hdrd pattern clipping --mode hdr10 --peak 10000 --level 1000 -o out/clip  (squares >= 1000 vanish)\n"
+    "  hdrd pattern clipping --mode hdr10 --peak 600 -o out/clip  (squares at 0.7-1.5 x 600 over PQ's full\n"
+    "      range, none clipped by hdrd: on the display, those at and above its clip point vanish)\n"
     "  hdrd pattern pq-ramp --mode hdr10 --steps 21 -o out/ramp --format png --json\n"
     "  hdrd pattern sdr-grey --mode hdr10 --sdr-white 203 -o out/sdr-grey\n"
     "Patterns are display-referred: levels are cd/m2 on the display, encoded with the clip curve."};

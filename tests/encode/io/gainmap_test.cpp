@@ -577,9 +577,20 @@ TEST(GainMapJpeg, ErrorsNameWhatIsWrong) {
   o = {};
   o.primary.quality = 0;
   EXPECT_EQ(code_of(encode_jpeg_gainmap(sdr, hdr, o)), "jpeg.options");
-  EncodedFrame flat = hdr;
+}
+
+// Issue 29 item 7: a peak at paper white (the rule every output shares: paper white follows
+// a lower peak) is a frame without headroom, not an error: the map says "no gain" and the
+// capacity range is the smallest the ISO 21496-1 weight is defined for.
+TEST(GainMap, PeakAtPaperWhiteIsAFlatMapNotAnError) {
+  const auto sdr = stilltest::rendition(stilltest::scene(32, 32), Mode::sdr);
+  EncodedFrame flat = stilltest::rendition(stilltest::scene(32, 32), Mode::hdr10);
   flat.target.peak_nits = flat.target.paper_white_nits;
-  EXPECT_EQ(code_of(encode_jpeg_gainmap(sdr, flat)), "gainmap.headroom");
+  auto m = compute_gain_map(sdr, flat);
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m->metadata.hdr_capacity_min_log2, 0);
+  EXPECT_NEAR(m->metadata.hdr_capacity_max_log2, 1e-3, 1e-9);
+  EXPECT_TRUE(encode_jpeg_gainmap(sdr, flat).ok());
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 // The GPU program description (no GL here; tests/shading runs it on llvmpipe).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "encode/kernel/constants.hpp"
 #include "encode/kernel/gpu_program.hpp"
+#include "encode/kernel/pipeline_internal.hpp"
 
 using namespace hdrd;
 
@@ -123,6 +127,45 @@ TEST(GpuProgram, ReadbackBuildsTheFrameAndMeasuresLight) {
   ASSERT_TRUE(f.ok());
   EXPECT_NEAR(f->content_light.max_cll_nits, 1000, 1.5);
   EXPECT_NEAR(f->content_light.max_fall_nits, (1000 + 203) / 2.0, 1.5);
+}
+
+// Issue 29 item 2: the clip code the GPU program receives (bases.z) and its 16-bit sample
+// limit are the CPU's (detail::peak_codes, checked at every integer peak from 100 to
+// 10 000 against ST 2084 in tests/encode/peak_code_test.cpp), at every 97th peak in both
+// ranges; and they decode (ST 2084 computed here) to at most the peak. The program's output:
+// tests/shading/gpu_encode_test.cpp (GpuEncodePeak).
+TEST(GpuProgram, ClipCodeIsThePeakCode) {
+  auto pq_eotf = [](double e) {
+    const double m1 = 2610.0 / 16384, m2 = 2523.0 / 4096 * 128, c1 = 3424.0 / 4096, c2 = 2413.0 / 4096 * 32,
+                 c3 = 2392.0 / 4096 * 32;
+    const double p = std::pow(std::clamp(e, 0.0, 1.0), 1 / m2);
+    return 10000 * std::pow(std::max(p - c1, 0.0) / (c2 - c3 * p), 1 / m1);
+  };
+  Image img(1, 1);
+  for (const Range range : {Range::full, Range::narrow}) {
+    auto decode = [&](int code) {
+      return pq_eotf(range == Range::narrow ? std::clamp((code / 4.0 - 16) / 219, 0.0, 1.0) : code / 1023.0);
+    };
+    for (int peak = 100; peak <= 10000; peak += 97) {
+      EncodeSettings s;
+      s.target = default_target(Mode::hdr10);
+      s.target.range = range;
+      s.target.peak_nits = peak;
+      s.target.paper_white_nits = std::min(203, peak);
+      s.tone.curve = "clip";
+      SceneInput in;
+      in.image = &img;
+      const auto prog = gpu::make_encode_program(prepare_pipeline(in, s).value());
+      ASSERT_TRUE(prog.supported) << prog.unsupported_reason;
+      const auto want = detail::peak_codes(s.target);
+      EXPECT_EQ(static_cast<int>(prog.uniforms.max_code), want.code) << peak;
+      EXPECT_LE(decode(static_cast<int>(prog.uniforms.max_code)), peak * (1 + 1e-12)) << peak;
+      if (range == Range::full) {
+        EXPECT_EQ(std::lround(prog.uniforms.signal_max * 65535.0), want.signal16) << peak;
+        EXPECT_LE(pq_eotf(std::lround(prog.uniforms.signal_max * 65535.0) / 65535.0), peak * (1 + 1e-12)) << peak;
+      }
+    }
+  }
 }
 
 }  // namespace
