@@ -89,8 +89,8 @@ class TempFile {
   fs::path temp_, final_;
 };
 
-// A full file system is named as such (the directory, not only the file): it is the
-// operator's to fix, and the daemon answers it 507 rather than 500.
+}  // namespace
+
 Error write_error(const fs::path& path, const std::string& what, int err) {
   if (err == ENOSPC || err == EDQUOT) {
     const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
@@ -99,6 +99,8 @@ Error write_error(const fs::path& path, const std::string& what, int err) {
   }
   return make_error("io.write", fmt::format("cannot write {}: {} ({})", path.string(), what, errno_text(err)));
 }
+
+namespace {
 
 constexpr std::string_view kTempMarker = ".tmp-";
 constexpr std::size_t kTempDigits = 12;

@@ -158,6 +158,11 @@ Result<void> write_raw(const std::filesystem::path& path, const EncodedFrame& fr
 // files written.
 nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::string, std::string>& files);
 
+// The error of a failed write of `path` (errno `err`): io.no_space naming the directory
+// when its file system is full (ENOSPC, EDQUOT: the operator's to fix; the daemon answers
+// 507), else io.write with `what` and the errno's text.
+Error write_error(const std::filesystem::path& path, const std::string& what, int err);
+
 // Writes bytes to `path` atomically.
 Result<void> atomic_write(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
                           const WriteOptions& write = {});

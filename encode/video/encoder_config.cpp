@@ -153,6 +153,13 @@ Result<EncoderConfig> encoder_config(const VideoSettings& s, const StreamInfo& s
     return make_error("video.size", fmt::format("x265 needs frames at least 64 pixels wide, not {}x{}", stream.width,
                                                 stream.height),
                       "size");
+  // ... and at least 16 rows: Debian 12's libx265 3.5 refuses fewer in avcodec_open2 (EINVAL,
+  // "Picture size must be at least one CTU": 16 is its smallest CTU), at every preset
+  // (measured: 64x8 to 64x14 and 256x2 fail, 64x16 works with ultrafast and medium).
+  if (c.encoder == "libx265" && stream.height < 16)
+    return make_error("video.size", fmt::format("x265 needs frames at least 16 pixels high, not {}x{}", stream.width,
+                                                stream.height),
+                      "size");
   if (c.encoder == "libsvtav1" && (stream.width < 64 || stream.height < 64))
     return make_error("video.size", fmt::format("SVT-AV1 needs frames of at least 64x64, not {}x{}", stream.width, stream.height),
                       "size");

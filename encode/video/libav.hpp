@@ -19,14 +19,15 @@ extern "C" {
 
 #include "encode/result.hpp"
 
-#define HDRD_LIBAV_FUNCTIONS(X)                                                                             \
-  X(av_dict_free) X(av_dict_get) X(av_dict_set) X(av_frame_alloc) X(av_frame_free) X(av_frame_get_buffer)    \
-  X(av_frame_make_writable) X(av_log_set_level) X(av_new_packet) X(av_packet_alloc) X(av_packet_free)        \
-  X(av_packet_rescale_ts) X(av_packet_unref) X(av_stream_new_side_data) X(av_strerror) X(av_write_frame)     \
-  X(av_write_trailer) X(avcodec_alloc_context3) X(avcodec_find_encoder_by_name) X(avcodec_free_context)      \
-  X(avcodec_open2) X(avcodec_parameters_from_context) X(avcodec_receive_packet) X(avcodec_send_frame)        \
-  X(avformat_alloc_output_context2) X(avformat_free_context) X(avformat_new_stream) X(avformat_write_header) \
-  X(avio_closep) X(avio_open)
+#define HDRD_LIBAV_FUNCTIONS(X)                                                                       \
+  X(av_dict_free) X(av_dict_get) X(av_dict_set) X(av_frame_alloc) X(av_frame_free)                    \
+  X(av_frame_get_buffer) X(av_frame_make_writable) X(av_log_set_level) X(av_mallocz) X(av_new_packet) \
+  X(av_packet_alloc) X(av_packet_free) X(av_packet_get_side_data) X(av_packet_rescale_ts)             \
+  X(av_packet_unref) X(av_stream_new_side_data) X(av_strerror) X(av_write_frame) X(av_write_trailer)  \
+  X(avcodec_alloc_context3) X(avcodec_find_encoder_by_name) X(avcodec_free_context) X(avcodec_open2)  \
+  X(avcodec_parameters_from_context) X(avcodec_receive_packet) X(avcodec_send_frame)                  \
+  X(avformat_alloc_output_context2) X(avformat_free_context) X(avformat_new_stream)                   \
+  X(avformat_write_header) X(avio_closep) X(avio_open)
 
 namespace hdrd::video::lav {
 

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <set>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -92,6 +93,14 @@ Error av_fail(const char* code, const std::string& what, int err) {
   return make_error(code, fmt::format("{}: {}", what, av_error_text(err)));
 }
 
+// A libav call that failed while writing `path`: a full file system is io.no_space (AVIO
+// hands the failed write's AVERROR(ENOSPC) back from av_write_frame, the trailer or the
+// close), anything else `code`.
+Error av_write_fail(const char* code, const fs::path& path, const std::string& what, int err) {
+  if (err == AVERROR(ENOSPC) || err == AVERROR(EDQUOT)) return io::write_error(path, what, AVUNERROR(err));
+  return av_fail(code, what, err);
+}
+
 struct CodecContextFree {
   void operator()(AVCodecContext* c) const { lav::avcodec_free_context(&c); }
 };
@@ -128,11 +137,11 @@ struct SpoolRecord {
 
 Result<void> fsync_path(const fs::path& p) {
   const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return make_error("io.write", fmt::format("cannot reopen {}: {}", p.string(), std::strerror(errno)));
+  if (fd < 0) return io::write_error(p, "cannot reopen it", errno);
   const int rc = ::fsync(fd);
   const int err = errno;
   ::close(fd);
-  if (rc != 0) return make_error("io.write", fmt::format("fsync {} failed: {}", p.string(), std::strerror(err)));
+  if (rc != 0) return io::write_error(p, "fsync failed", err);
   return {};
 }
 
@@ -160,6 +169,28 @@ struct SequenceWriter::Impl {
   double convert_cpu_ms = 0;
   bool failed = false, done = false;
   bool opened = false, flushed = false;  // the encoder's state, for close_encoder()
+  // The stream's parameter sets when the encoder delivers them with its first packet
+  // (AV_PKT_DATA_NEW_EXTRADATA: FFmpeg 5.1's libaom-av1 does) instead of at open: the
+  // Matroska muxer refuses AV1 without them ("Invalid data"), MP4 took them from packet 0.
+  std::vector<std::uint8_t> packet_extradata;
+  // Packets in the spool, in decode order, and the reorder depth they need: the largest
+  // (decode index - pts) over them (pts are frame indices). copy_packets() gives packet n
+  // dts = n - reorder_delay, hdrd's own timestamps: libx265 3.5 computes its first dts from
+  // m_bframeDelayTime, which it sets only once the (bframes delay + 1)-th frame arrives, so
+  // a sequence of 1 or 2 frames got dts from an uninitialised member (issue 28.8: MP4's
+  // "pts/dts pair unsupported" about 1 run in 30).
+  std::int64_t spooled_packets = 0, reorder_delay = 0;
+
+  void note_spooled(std::int64_t pts) {
+    reorder_delay = std::max(reorder_delay, spooled_packets - pts);
+    ++spooled_packets;
+  }
+
+  // The stream's parameter sets (extradata), from the encoder's context or its first packet.
+  std::span<const std::uint8_t> parameter_sets() const {
+    if (enc && enc->extradata_size > 0) return {enc->extradata, static_cast<std::size_t>(enc->extradata_size)};
+    return packet_extradata;
+  }
 
   ~Impl() { remove_files(); }
 
@@ -189,7 +220,7 @@ struct SequenceWriter::Impl {
     if (!fd) return fd.error();
     ::close(*fd);  // created write-only; the spool is read back in finish()
     spool.reset(std::fopen(spool_path.c_str(), "w+b"));
-    if (!spool) return make_error("io.write", fmt::format("cannot open the spool file {}: {}", spool_path.string(), std::strerror(errno)));
+    if (!spool) return io::write_error(spool_path, "cannot open the spool file", errno);
     return {};
   }
 
@@ -198,13 +229,25 @@ struct SequenceWriter::Impl {
       const int rc = lav::avcodec_receive_packet(enc.get(), packet.get());
       if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return {};
       if (rc < 0) return av_fail("video.encoder", fmt::format("{} failed", config.encoder), rc);
+      if (packet_extradata.empty()) {
+        std::size_t n = 0;
+        if (const std::uint8_t* d = lav::av_packet_get_side_data(packet.get(), AV_PKT_DATA_NEW_EXTRADATA, &n); d && n > 0)
+          packet_extradata.assign(d, d + n);
+      }
+      if (packet->pts < 0 || packet->pts >= frames) {
+        const std::int64_t pts = packet->pts;
+        lav::av_packet_unref(packet.get());
+        return make_error("video.encoder", fmt::format("{} gave a packet for frame {} of {}", config.encoder, pts, frames));
+      }
+      note_spooled(packet->pts);
       SpoolRecord r{packet->pts, packet->dts, packet->duration, packet->flags, static_cast<std::uint32_t>(packet->size)};
       if (packet->flags & AV_PKT_FLAG_KEY) key_pts.insert(packet->pts);
       const bool ok = std::fwrite(&r, sizeof r, 1, spool.get()) == 1 &&
                       std::fwrite(packet->data, 1, static_cast<std::size_t>(packet->size), spool.get()) ==
                           static_cast<std::size_t>(packet->size);
+      const int err = errno;
       lav::av_packet_unref(packet.get());
-      if (!ok) return make_error("io.write", fmt::format("cannot write the spool file {}: {}", spool_path.string(), std::strerror(errno)));
+      if (!ok) return io::write_error(spool_path, "cannot write the spool file", err);
     }
   }
 
@@ -353,7 +396,7 @@ Result<void> SequenceWriter::Impl::write_segment(const fs::path& segment) {
   if (const int rc = lav::avcodec_send_frame(enc.get(), nullptr); rc < 0) return av_fail("video.encoder", "flush", rc);
   if (auto ok = spool_packets(); !ok) return ok.error();
   if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
-    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+    return io::write_error(spool_path, "cannot flush and rewind the spool file", errno);
   fs::path temp;
   auto fd = io::create_temp_file(segment, temp);
   if (!fd) return fd.error();
@@ -361,13 +404,14 @@ Result<void> SequenceWriter::Impl::write_segment(const fs::path& segment) {
   if (!out) {
     ::close(*fd);
     ::unlink(temp.c_str());
-    return make_error("io.write", fmt::format("cannot write {}: {}", temp.string(), std::strerror(errno)));
+    return io::write_error(temp, "cannot open it", errno);
   }
-  const std::uint32_t extra = enc->extradata_size > 0 ? static_cast<std::uint32_t>(enc->extradata_size) : 0;
+  const std::span<const std::uint8_t> params = parameter_sets();
+  const std::uint32_t extra = static_cast<std::uint32_t>(params.size());
   const std::uint32_t count = static_cast<std::uint32_t>(frames);
   bool ok = std::fwrite(kSegmentMagic, sizeof kSegmentMagic, 1, out.get()) == 1 &&
             std::fwrite(&extra, sizeof extra, 1, out.get()) == 1 &&
-            (extra == 0 || std::fwrite(enc->extradata, 1, extra, out.get()) == extra) &&
+            (extra == 0 || std::fwrite(params.data(), 1, extra, out.get()) == extra) &&
             std::fwrite(&count, sizeof count, 1, out.get()) == 1;
   std::vector<char> buf(1 << 16);
   while (ok) {
@@ -376,11 +420,12 @@ Result<void> SequenceWriter::Impl::write_segment(const fs::path& segment) {
     ok = std::fwrite(buf.data(), 1, n, out.get()) == n;
   }
   ok = ok && std::fflush(out.get()) == 0 && ::fsync(::fileno(out.get())) == 0;
-  out.reset();
+  int err = errno;
+  if (std::fclose(out.release()) != 0 && ok) ok = false, err = errno;
   if (!ok || ::rename(temp.c_str(), segment.c_str()) != 0) {
-    const int err = errno;
+    if (ok) err = errno;
     ::unlink(temp.c_str());
-    return make_error("io.write", fmt::format("cannot write the segment {}: {}", segment.string(), std::strerror(err)));
+    return io::write_error(segment, "cannot write the segment", err);
   }
   spool.reset();
   ::unlink(spool_path.c_str());
@@ -403,8 +448,11 @@ Result<void> SequenceWriter::Impl::append_segment(const fs::path& segment, int i
   std::vector<std::uint8_t> params(extra);
   if (std::fread(params.data(), 1, extra, in.get()) != extra || std::fread(&count, sizeof count, 1, in.get()) != 1)
     return make_error("video.segment", name + ": truncated header");
-  const std::uint8_t* mine = enc->extradata;
-  if (static_cast<int>(extra) != std::max(enc->extradata_size, 0) || (extra > 0 && std::memcmp(params.data(), mine, extra) != 0))
+  // An encoder that delivers its parameter sets with its first packet has none before it
+  // has encoded: the first segment's are the stream's, and every later one must match them.
+  if (index == 0 && parameter_sets().empty()) packet_extradata = params;
+  const std::span<const std::uint8_t> mine = parameter_sets();
+  if (extra != mine.size() || (extra > 0 && std::memcmp(params.data(), mine.data(), extra) != 0))
     return make_error("video.segment", name + ": encoded with other parameters (its parameter sets differ from this "
                                               "sequence's settings)");
   const std::int64_t offset = frames;
@@ -421,8 +469,9 @@ Result<void> SequenceWriter::Impl::append_segment(const fs::path& segment, int i
     if (r.pts < 0 || r.pts >= count)
       return make_error("video.segment", fmt::format("{}: packet {} is for frame {} of {}", name, packets, r.pts, count));
     r.pts += offset, r.dts += offset;
+    note_spooled(r.pts);
     if (std::fwrite(&r, sizeof r, 1, spool.get()) != 1 || std::fwrite(data.data(), 1, data.size(), spool.get()) != data.size())
-      return make_error("io.write", fmt::format("cannot write the spool file {}", spool_path.string()));
+      return io::write_error(spool_path, "cannot write the spool file", errno);
     ++packets;
   }
   if (packets != count) return make_error("video.segment", fmt::format("{}: {} packets for {} frames", name, packets, count));
@@ -523,6 +572,13 @@ Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Li
   if (!st) return make_error("video.mux", "out of memory");
   if (const int rc = lav::avcodec_parameters_from_context(st->codecpar, enc.get()); rc < 0)
     return av_fail("video.mux", "stream parameters", rc);
+  if (st->codecpar->extradata_size == 0 && !packet_extradata.empty()) {
+    auto* d = static_cast<std::uint8_t*>(lav::av_mallocz(packet_extradata.size() + AV_INPUT_BUFFER_PADDING_SIZE));
+    if (!d) return make_error("video.mux", "out of memory");
+    std::memcpy(d, packet_extradata.data(), packet_extradata.size());
+    st->codecpar->extradata = d;  // freed with the stream
+    st->codecpar->extradata_size = static_cast<int>(packet_extradata.size());
+  }
   // hvc1: parameter sets only in the sample entry (what Apple players require).
   if (settings.codec == Codec::hevc && settings.container == Container::mp4) st->codecpar->codec_tag = MKTAG('h', 'v', 'c', '1');
   st->time_base = enc->time_base;
@@ -530,13 +586,13 @@ Result<AVStream*> SequenceWriter::Impl::start_muxer(Muxer& m, const io::Cta861Li
   if (is_hdr(stream.target.mode))
     if (auto ok = add_static_side_data(st, stream.mastering, cll); !ok) return ok.error();
   if (const int rc = lav::avio_open(&m.ctx->pb, output_temp.c_str(), AVIO_FLAG_WRITE); rc < 0)
-    return av_fail("io.write", fmt::format("cannot write {}", output_temp.string()), rc);
+    return av_write_fail("io.write", output_temp, fmt::format("cannot write {}", output_temp.string()), rc);
   AVDictionary* opts = nullptr;
   // moov first, so a player (or a browser fetching GET /v1/jobs/{id}/result) starts at once.
   if (settings.container == Container::mp4) lav::av_dict_set(&opts, "movflags", "+faststart", 0);
   const int rc = lav::avformat_write_header(m.ctx, &opts);
   lav::av_dict_free(&opts);
-  if (rc < 0) return av_fail("video.mux", fmt::format("cannot start the {} file", format), rc);
+  if (rc < 0) return av_write_fail("video.mux", output, fmt::format("cannot start the {} file", format), rc);
   return st;
 }
 
@@ -555,10 +611,11 @@ Result<void> SequenceWriter::Impl::copy_packets(Muxer& m, AVStream* st, const Se
     if (!bytes) return bytes.error();
     if (const int rc = lav::av_new_packet(out.get(), static_cast<int>(bytes->size())); rc < 0) return av_fail("video.mux", "packet", rc);
     std::memcpy(out->data, bytes->data(), bytes->size());
-    out->pts = r.pts, out->dts = r.dts, out->duration = r.duration, out->flags = r.flags;
+    out->pts = r.pts, out->dts = n - reorder_delay, out->duration = r.duration, out->flags = r.flags;
     out->stream_index = 0;
     lav::av_packet_rescale_ts(out.get(), enc->time_base, st->time_base);
-    if (const int rc = lav::av_write_frame(m.ctx, out.get()); rc < 0) return av_fail("video.mux", fmt::format("packet {}", n), rc);
+    if (const int rc = lav::av_write_frame(m.ctx, out.get()); rc < 0)
+      return av_write_fail("video.mux", output, fmt::format("packet {}", n), rc);
     lav::av_packet_unref(out.get());
   }
 }
@@ -606,7 +663,7 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
   const auto t1 = std::chrono::steady_clock::now();
   encoder_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
   if (std::fflush(spool.get()) != 0 || std::fseek(spool.get(), 0, SEEK_SET) != 0)
-    return make_error("io.write", fmt::format("cannot rewind the spool file {}", spool_path.string()));
+    return io::write_error(spool_path, "cannot flush and rewind the spool file", errno);
 
   const io::Cta861Light cll = io::cta861_light(meta ? meta->content_light() : frames_light, stream.mastering);
   auto fd = io::create_temp_file(output, output_temp);
@@ -617,15 +674,15 @@ Result<VideoResult> SequenceWriter::Impl::mux(const SequenceMetadata* meta) {
     auto st = start_muxer(m, cll);
     if (!st) return st.error();
     if (auto ok = copy_packets(m, *st, meta, cll); !ok) return ok.error();
-    if (const int rc = lav::av_write_trailer(m.ctx); rc < 0) return av_fail("video.mux", "cannot finish the file", rc);
-    if (const int rc = lav::avio_closep(&m.ctx->pb); rc < 0) return av_fail("io.write", "close", rc);
+    if (const int rc = lav::av_write_trailer(m.ctx); rc < 0) return av_write_fail("video.mux", output, "cannot finish the file", rc);
+    if (const int rc = lav::avio_closep(&m.ctx->pb); rc < 0) return av_write_fail("io.write", output, "close", rc);
   }
   spool.reset();
   ::unlink(spool_path.c_str());
   spool_path.clear();
   if (auto ok = fsync_path(output_temp); !ok) return ok.error();
   if (::rename(output_temp.c_str(), output.c_str()) != 0)
-    return make_error("io.write", fmt::format("cannot rename {} to {}: {}", output_temp.string(), output.string(), std::strerror(errno)));
+    return io::write_error(output, fmt::format("cannot rename {} to it", output_temp.string()), errno);
   output_temp.clear();
   mux_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
   return result(meta, cll);
