@@ -12,6 +12,8 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <optional>
+#include <variant>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -82,13 +84,66 @@ class Section {
   std::set<std::string> seen_;
 };
 
-unsigned parse_mode_octal(const std::string& s, const std::string& source) {
+unsigned parse_mode_octal(const std::string& s, const std::string& source, const std::string& key) {
   if (s.empty() || s.size() > 4 || s.find_first_not_of("01234567") != std::string::npos)
-    config_fail(source, "server.socket_mode must be an octal string such as \"0660\"", "server.socket_mode");
+    config_fail(source, key + " must be an octal string such as \"0660\"", key);
   return unsigned(std::stoul(s, nullptr, 8));
 }
 
 }  // namespace
+
+// The table. Order is hdrd.toml's (config/hdrd.toml) and hdrd.toml(5)'s.
+std::span<const ConfigKey> config_keys() {
+  static const ConfigKey kKeys[] = {
+      {"server", "socket_path", [](Config& c) -> ConfigField { return &c.server.socket_path; }},
+      {"server", "socket_mode", [](Config& c) -> ConfigField { return &c.server.socket_mode; }},
+      {"server", "socket_group", [](Config& c) -> ConfigField { return &c.server.socket_group; }},
+      {"server", "systemd_activation", [](Config& c) -> ConfigField { return &c.server.systemd_activation; }},
+      {"server", "tcp_listen", [](Config& c) -> ConfigField { return &c.server.tcp_listen; }},
+      {"server", "tcp_allow_non_loopback", [](Config& c) -> ConfigField { return &c.server.tcp_allow_non_loopback; }},
+      {"server", "token", [](Config& c) -> ConfigField { return &c.server.token; }},
+      {"server", "token_file", [](Config& c) -> ConfigField { return &c.server.token_file; }},
+      {"server", "connection_timeout_s", [](Config& c) -> ConfigField { return &c.server.connection_timeout_s; }},
+      {"server", "max_connections", [](Config& c) -> ConfigField { return &c.server.max_connections; }},
+      {"server", "max_connections_per_peer", [](Config& c) -> ConfigField { return &c.server.max_connections_per_peer; }},
+      {"server", "header_timeout_s", [](Config& c) -> ConfigField { return &c.server.header_timeout_s; }},
+      {"server", "body_grace_s", [](Config& c) -> ConfigField { return &c.server.body_grace_s; }},
+      {"server", "min_body_bytes_per_s", [](Config& c) -> ConfigField { return &c.server.min_body_bytes_per_s; }},
+      {"server", "http_threads", [](Config& c) -> ConfigField { return &c.server.http_threads; }},
+      {"server", "drain_timeout_s", [](Config& c) -> ConfigField { return &c.server.drain_timeout_s; }},
+      {"workers", "render_workers", [](Config& c) -> ConfigField { return &c.workers.render_workers; }},
+      {"workers", "encode_threads", [](Config& c) -> ConfigField { return &c.workers.encode_threads; }},
+      {"workers", "queue_depth", [](Config& c) -> ConfigField { return &c.workers.queue_depth; }},
+      {"workers", "backend", [](Config& c) -> ConfigField { return &c.workers.backend; }},
+      {"workers", "coalesce", [](Config& c) -> ConfigField { return &c.workers.coalesce; }},
+      {"workers", "retry_after_s", [](Config& c) -> ConfigField { return &c.workers.retry_after_s; }},
+      {"workers", "memory_budget_bytes", [](Config& c) -> ConfigField { return &c.workers.memory_budget_bytes; }},
+      {"sequences", "max_running", [](Config& c) -> ConfigField { return &c.sequences.max_running; }},
+      {"sequences", "max_queued", [](Config& c) -> ConfigField { return &c.sequences.max_queued; }},
+      {"sequences", "history", [](Config& c) -> ConfigField { return &c.sequences.history; }},
+      {"cluster", "slurm_scripts_dir", [](Config& c) -> ConfigField { return &c.cluster.slurm_scripts_dir; }},
+      {"cluster", "slurm_bin_dir", [](Config& c) -> ConfigField { return &c.cluster.slurm_bin_dir; }},
+      {"cluster", "slurm_conf", [](Config& c) -> ConfigField { return &c.cluster.slurm_conf; }},
+      {"cluster", "hdrd_program", [](Config& c) -> ConfigField { return &c.cluster.hdrd_program; }},
+      {"cluster", "sbatch_options", [](Config& c) -> ConfigField { return &c.cluster.sbatch_options; }},
+      {"cluster", "command_timeout_ms", [](Config& c) -> ConfigField { return &c.cluster.command_timeout_ms; }},
+      {"paths", "asset_root", [](Config& c) -> ConfigField { return &c.paths.asset_root; }},
+      {"paths", "dump_dir", [](Config& c) -> ConfigField { return &c.paths.dump_dir; }},
+      {"limits", "max_width", [](Config& c) -> ConfigField { return &c.limits.max_width; }},
+      {"limits", "max_height", [](Config& c) -> ConfigField { return &c.limits.max_height; }},
+      {"limits", "max_pixels", [](Config& c) -> ConfigField { return &c.limits.max_pixels; }},
+      {"limits", "max_samples", [](Config& c) -> ConfigField { return &c.limits.max_samples; }},
+      {"limits", "max_lights", [](Config& c) -> ConfigField { return &c.limits.max_lights; }},
+      {"limits", "max_body_bytes", [](Config& c) -> ConfigField { return &c.limits.max_body_bytes; }},
+      {"limits", "max_upload_bytes", [](Config& c) -> ConfigField { return &c.limits.max_upload_bytes; }},
+      {"limits", "max_ui_bytes", [](Config& c) -> ConfigField { return &c.limits.max_ui_bytes; }},
+      {"limits", "max_json_depth", [](Config& c) -> ConfigField { return &c.limits.max_json_depth; }},
+      {"limits", "max_request_seconds", [](Config& c) -> ConfigField { return &c.limits.max_request_seconds; }},
+      {"log", "level", [](Config& c) -> ConfigField { return &c.log.level; }},
+      {"log", "access_log", [](Config& c) -> ConfigField { return &c.log.access_log; }},
+  };
+  return kKeys;
+}
 
 fs::path default_socket_path() {
   if (const char* x = std::getenv("XDG_RUNTIME_DIR"); x && *x) return fs::path(x) / "hdrd.sock";
@@ -114,75 +169,29 @@ Config parse_config(std::string_view text, const std::string& source) {
   }
   Config c;
   c.source = source;
-
-  Section server(root, "server", source);
-  std::string mode = "0660";
-  server.read("socket_path", c.server.socket_path);
-  server.read("socket_mode", mode);
-  c.server.socket_mode = parse_mode_octal(mode, source);
-  server.read("socket_group", c.server.socket_group);
-  server.read("systemd_activation", c.server.systemd_activation);
-  server.read("tcp_listen", c.server.tcp_listen);
-  server.read("tcp_allow_non_loopback", c.server.tcp_allow_non_loopback);
-  server.read("token", c.server.token);
-  server.read("token_file", c.server.token_file);
-  server.read("connection_timeout_s", c.server.connection_timeout_s);
-  server.read("max_connections", c.server.max_connections);
-  server.read("max_connections_per_peer", c.server.max_connections_per_peer);
-  server.read("header_timeout_s", c.server.header_timeout_s);
-  server.read("body_grace_s", c.server.body_grace_s);
-  server.read("min_body_bytes_per_s", c.server.min_body_bytes_per_s);
-  server.read("http_threads", c.server.http_threads);
-  server.read("drain_timeout_s", c.server.drain_timeout_s);
-  server.finish();
-
-  Section workers(root, "workers", source);
-  workers.read("render_workers", c.workers.render_workers);
-  workers.read("encode_threads", c.workers.encode_threads);
-  workers.read("queue_depth", c.workers.queue_depth);
-  workers.read("backend", c.workers.backend);
-  workers.read("coalesce", c.workers.coalesce);
-  workers.read("retry_after_s", c.workers.retry_after_s);
-  workers.read("memory_budget_bytes", c.workers.memory_budget_bytes);
-  workers.finish();
-
-  Section sequences(root, "sequences", source);
-  sequences.read("max_running", c.sequences.max_running);
-  sequences.read("max_queued", c.sequences.max_queued);
-  sequences.read("history", c.sequences.history);
-  sequences.finish();
-
-  Section cluster(root, "cluster", source);
-  cluster.read("slurm_scripts_dir", c.cluster.slurm_scripts_dir);
-  cluster.read("slurm_bin_dir", c.cluster.slurm_bin_dir);
-  cluster.read("slurm_conf", c.cluster.slurm_conf);
-  cluster.read("hdrd_program", c.cluster.hdrd_program);
-  cluster.read("sbatch_options", c.cluster.sbatch_options);
-  cluster.read("command_timeout_ms", c.cluster.command_timeout_ms);
-  cluster.finish();
-
-  Section paths(root, "paths", source);
-  paths.read("asset_root", c.paths.asset_root);
-  paths.read("dump_dir", c.paths.dump_dir);
-  paths.finish();
-
-  Section limits(root, "limits", source);
-  limits.read("max_width", c.limits.max_width);
-  limits.read("max_height", c.limits.max_height);
-  limits.read("max_pixels", c.limits.max_pixels);
-  limits.read("max_samples", c.limits.max_samples);
-  limits.read("max_lights", c.limits.max_lights);
-  limits.read("max_body_bytes", c.limits.max_body_bytes);
-  limits.read("max_upload_bytes", c.limits.max_upload_bytes);
-  limits.read("max_ui_bytes", c.limits.max_ui_bytes);
-  limits.read("max_json_depth", c.limits.max_json_depth);
-  limits.read("max_request_seconds", c.limits.max_request_seconds);
-  limits.finish();
-
-  Section log(root, "log", source);
-  log.read("level", c.log.level);
-  log.read("access_log", c.log.access_log);
-  log.finish();
+  // Every key of the table, section by section; each section then refuses keys it does not know.
+  std::string_view open;
+  std::optional<Section> section;
+  for (const auto& k : config_keys()) {
+    if (k.section != open) {
+      if (section) section->finish();
+      section.emplace(root, std::string(k.section), source);
+      open = k.section;
+    }
+    std::visit(
+        [&](auto* field) {
+          using T = std::remove_pointer_t<decltype(field)>;
+          if constexpr (std::is_same_v<T, unsigned>) {  // a file mode, written as an octal string
+            std::string mode = fmt::format("{:04o}", *field);
+            section->read(k.key, mode);
+            *field = parse_mode_octal(mode, source, std::string(k.section) + "." + std::string(k.key));
+          } else {
+            section->read(k.key, *field);
+          }
+        },
+        k.field(c));
+  }
+  if (section) section->finish();
 
   validate_config(c);
   return c;
@@ -292,39 +301,21 @@ ConnectionLimits connection_limits(const ServerConfig& s) {
 }
 
 nlohmann::json config_json(const Config& c) {
-  const auto& s = c.server;
-  const auto& w = c.workers;
-  const auto& l = c.limits;
-  return {
-      {"source", c.source.string()},
-      {"server",
-       {{"socket_path", s.socket_path.string()}, {"socket_mode", fmt::format("{:04o}", s.socket_mode)},
-        {"socket_group", s.socket_group}, {"systemd_activation", s.systemd_activation},
-        {"tcp_listen", s.tcp_listen}, {"tcp_allow_non_loopback", s.tcp_allow_non_loopback},
-        {"token", s.token.empty() ? "" : "(set)"}, {"token_file", s.token_file.string()},
-        {"connection_timeout_s", s.connection_timeout_s}, {"max_connections", s.max_connections},
-        {"max_connections_per_peer", s.max_connections_per_peer}, {"header_timeout_s", s.header_timeout_s},
-        {"body_grace_s", s.body_grace_s}, {"min_body_bytes_per_s", s.min_body_bytes_per_s},
-        {"http_threads", s.http_threads}, {"drain_timeout_s", s.drain_timeout_s}}},
-      {"workers",
-       {{"render_workers", w.render_workers}, {"encode_threads", w.encode_threads}, {"queue_depth", w.queue_depth},
-        {"backend", w.backend}, {"coalesce", w.coalesce}, {"retry_after_s", w.retry_after_s},
-        {"memory_budget_bytes", w.memory_budget_bytes}}},
-      {"sequences",
-       {{"max_running", c.sequences.max_running}, {"max_queued", c.sequences.max_queued},
-        {"history", c.sequences.history}}},
-      {"cluster",
-       {{"slurm_scripts_dir", c.cluster.slurm_scripts_dir.string()}, {"slurm_bin_dir", c.cluster.slurm_bin_dir.string()},
-        {"slurm_conf", c.cluster.slurm_conf.string()}, {"hdrd_program", c.cluster.hdrd_program},
-        {"sbatch_options", c.cluster.sbatch_options}, {"command_timeout_ms", c.cluster.command_timeout_ms}}},
-      {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
-      {"limits",
-       {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},
-        {"max_samples", l.max_samples}, {"max_lights", l.max_lights}, {"max_body_bytes", l.max_body_bytes},
-        {"max_upload_bytes", l.max_upload_bytes}, {"max_ui_bytes", l.max_ui_bytes},
-        {"max_json_depth", l.max_json_depth}, {"max_request_seconds", l.max_request_seconds}}},
-      {"log", {{"level", c.log.level}, {"access_log", c.log.access_log}}},
-  };
+  nlohmann::json j = {{"source", c.source.string()}};
+  Config copy = c;  // the table's accessors take a Config&
+  for (const auto& k : config_keys()) {
+    auto& out = j[std::string(k.section)][std::string(k.key)];
+    std::visit(
+        [&](auto* field) {
+          using T = std::remove_pointer_t<decltype(field)>;
+          if constexpr (std::is_same_v<T, unsigned>) out = fmt::format("{:04o}", *field);
+          else if constexpr (std::is_same_v<T, fs::path>) out = field->string();
+          else out = *field;
+        },
+        k.field(copy));
+  }
+  if (!c.server.token.empty()) j["server"]["token"] = "(set)";  // never printed
+  return j;
 }
 
 }  // namespace hdrd::daemon

@@ -6,6 +6,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
+#include <string_view>
+#include <variant>
 #include <string>
 #include <vector>
 
@@ -89,6 +92,18 @@ struct Config {
   LogConfig log;
   std::filesystem::path source;            // the file it was read from (empty: defaults)
 };
+
+// One key of hdrd.toml: its section, name and the field it sets. The one table of the keys:
+// the parser reads these and refuses others, config_json prints them, hdrd.toml(5) lists
+// them (its text: the comment above each key in config/hdrd.toml; `hdrd docs config-man`).
+using ConfigField = std::variant<bool*, int*, unsigned*, double*, std::int64_t*, std::uint64_t*, std::string*,
+                                 std::filesystem::path*>;
+struct ConfigKey {
+  std::string_view section;
+  std::string_view key;
+  ConfigField (*field)(Config& c);
+};
+std::span<const ConfigKey> config_keys();
 
 // Reads a TOML file. Unknown sections/keys and wrong types are errors (thrown as
 // HdrdError naming file:line and key), so a typo never silently does nothing.

@@ -22,6 +22,9 @@ import socket
 import time
 import uuid
 
+# The package version: hdrd's (CMakeLists.txt project(); tests/package checks they agree).
+__version__ = "0.1.0"
+
 __all__ = ["HdrdClient", "HdrdError", "JobFailed", "Frame", "default_socket"]
 
 

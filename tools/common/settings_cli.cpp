@@ -4,7 +4,9 @@
 
 #include <fmt/format.h>
 
+#include "encode/tone/tonemap.hpp"
 #include "job/request.hpp"
+#include "tools/common/cli_docs.hpp"
 
 namespace hdrd::cli {
 namespace {
@@ -43,6 +45,17 @@ std::string help_of(const job::Setting& s) {
   return h;
 }
 
+// What the option's value completes to (bash completion, cli_docs.hpp).
+ValueHint hint_of(const job::Setting& s) {
+  ValueHint h;
+  for (auto c : s.choices) h.words.emplace_back(c);
+  h.list = s.type == job::Type::choice_list;
+  h.files = s.type == job::Type::path || s.type == job::Type::scene;
+  if (s.path == "tone.curve")
+    for (const auto& c : tonemap::curves()) h.words.emplace_back(c.name);
+  return h;
+}
+
 }  // namespace
 
 void add_setting_options(CLI::App& app, job::Source source, job::Reach reach, SettingArgs& args,
@@ -68,6 +81,7 @@ void add_setting_options(CLI::App& app, job::Source source, job::Reach reach, Se
                                                              : CLI::MultiOptionPolicy::TakeLast);
     }
     o->group(group_of(s.path));
+    set_value_hint(o, hint_of(s));
   }
   for (const auto& c : job::composites()) {
     if (!job::applies(c.sources, source) || skipped(c.flag)) continue;

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/client.hpp"
+#include "tools/common/cli_docs.hpp"
 #include "tools/common/progress_bar.hpp"
 #include "tools/hdrctl/options.hpp"
 
@@ -476,6 +477,22 @@ std::string examples(std::initializer_list<const char*> lines) {
   return s + kGlobalNote;
 }
 
+int print_docs(const CLI::App& app, const std::string& what) {
+  hdrd::cli::ManPage page{.name = "hdrctl", .section = 1, .version = "hdrd " HDRD_VERSION_STRING,
+                          .summary = "client of the hdrd daemon"};
+  page.sections = {
+      {"Environment", "HDRD_SOCKET: the daemon's socket when --socket is not given; else "
+                      "$XDG_RUNTIME_DIR/hdrd.sock, else /run/hdrd/hdrd.sock (the system service's: members of "
+                      "the hdrd group may connect)."},
+      {"Exit status", "0 ok, 1 an error answer (or a failed selftest), 2 a usage error, 3 the daemon cannot be reached."},
+  };
+  page.see_also = {"hdrd(1)", "hdrd.toml(5)"};
+  if (what == "man") std::cout << hdrd::cli::man_page(app, page);
+  else if (what == "bash-completion") std::cout << hdrd::cli::bash_completion(app);
+  else throw Failure{2, "hdrctl docs: unknown page '" + what + "' (man, bash-completion)"};
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -577,8 +594,15 @@ int main(int argc, char** argv) {
   metrics->footer(examples({"hdrctl metrics | grep hdrd_requests_total",
                             "hdrctl metrics --json | jq '.samples[] | select(.name == \"hdrd_queue_depth\")'"}));
 
+  // Hidden: hdrctl(1) and the bash completion, written from these options (cmake/Docs.cmake).
+  std::string docs_what;
+  auto* docs = app.add_subcommand("docs", "Write hdrctl(1) or hdrctl's bash completion to stdout");
+  docs->add_option("what", docs_what, "man or bash-completion")->required();
+  docs->group("");
+
   try {
     app.parse(argc, argv);
+    if (*docs) return print_docs(app, docs_what);
     if (*render) run_render(g, ro);
     else if (*encode) run_encode(g, eo);
     else if (*pattern) run_pattern(g, po);
