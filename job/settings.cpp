@@ -281,8 +281,9 @@ std::vector<Setting> make_table() {
        .unit = "deg", .min = 1, .max = 179, .default_doc = "the scene's", .flag = "--fov", .metavar = "DEG",
        .query = "fov_y_deg"},
       {.path = "encoder", .type = T::choice, .sources = kRender,
-       .doc = "Where a render is encoded: auto = on the GPU when its program covers the request and no output needs "
-              "the CPU's display light (EXR), else the CPU",
+       .doc = "Where a render is encoded: auto = the GPU pass on a hardware GPU when its program covers the request "
+              "and no output needs the CPU's display light (EXR); the CPU otherwise, and on a software rasteriser "
+              "(llvmpipe), where the CPU encoder is faster",
        .choices = kEncoder, .default_json = "\"auto\"", .flag = "--encoder", .metavar = "WHERE", .query = "encoder"},
       {.path = "input", .type = T::choice, .sources = kEncode, .doc = "How the EXR's values are meant (REFERENCE.md §1.1)",
        .choices = kInputUnits, .default_doc = "absolute when the file has whiteLuminance, else relative",

@@ -3,6 +3,7 @@
 // outputs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -142,6 +143,39 @@ TEST(FrameJob, ExposureRule) {
   EXPECT_EQ(exposure_mode(req(Source::render, R"({"exposure":{"mode":"log-average"}})"), true),
             exposure::Mode::log_average)
       << "a mode given is the mode used";
+}
+
+// Issue 29 item 16: --encoder auto took the GPU pass on llvmpipe, where the CPU encoder is
+// faster and the process smaller (docs/performance.md "Which encoder"). The choice by
+// renderer kind, and the kind from real GL_RENDERER strings.
+TEST(FrameJob, EncoderChoiceByRendererKind) {
+  using shading::RendererKind;
+  EXPECT_EQ(shading::renderer_kind("llvmpipe (LLVM 15.0.6, 256 bits)"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("softpipe"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("Mesa X11 / swrast"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("Google SwiftShader"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("NVIDIA H200/PCIe/SSE2"), RendererKind::hardware);
+  EXPECT_EQ(shading::renderer_kind("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.6, DRM 3.54)"),
+            RendererKind::hardware);
+  EXPECT_EQ(shading::renderer_kind("Mesa Intel(R) UHD Graphics 620 (KBL GT2)"), RendererKind::hardware);
+  const struct {
+    const char* setting;
+    RendererKind kind;
+    bool exr;
+    EncoderChoice want;
+  } cases[] = {
+      {"auto", RendererKind::software, false, EncoderChoice::cpu},
+      {"auto", RendererKind::hardware, false, EncoderChoice::gpu},
+      {"auto", RendererKind::hardware, true, EncoderChoice::cpu},
+      {"auto", RendererKind::software, true, EncoderChoice::cpu},
+      {"gpu", RendererKind::software, false, EncoderChoice::gpu},
+      {"gpu", RendererKind::hardware, false, EncoderChoice::gpu},
+      {"cpu", RendererKind::hardware, false, EncoderChoice::cpu},
+      {"cpu", RendererKind::software, false, EncoderChoice::cpu},
+  };
+  for (const auto& c : cases)
+    EXPECT_EQ(choose_encoder(c.setting, c.kind, c.exr), c.want)
+        << c.setting << " " << shading::to_string(c.kind) << (c.exr ? " exr" : "");
 }
 
 TEST(FrameJob, OutputsAreCheckedAgainstTheResolvedMode) {
