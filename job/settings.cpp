@@ -98,7 +98,9 @@ std::vector<Setting> make_table() {
        .doc = "Curve parameters by name (ranges: hdrd tonemap --list)", .min = -1e9, .max = 1e9,
        .default_doc = "each parameter's default", .flag = "--tonemap-param", .metavar = "NAME=VALUE"},
       {.path = "tone.apply", .type = T::choice, .sources = kSceneReferred,
-       .doc = "How a scalar curve applies: per-channel, max-rgb or luminance", .choices = kApply,
+       .doc = "How the curve applies to RGB: per-channel, max-rgb or luminance (a scalar curve), or rgb (the curve's "
+              "own RGB operator, the only way an RGB operator such as agx applies)",
+       .choices = kApply,
        .default_doc = "the curve's", .flag = "--tonemap-apply", .metavar = "HOW", .query = "apply"},
       {.path = "gamut", .type = T::choice, .sources = kSceneReferred,
        .doc = "Gamut mapping after tone mapping: ictcp (constant hue) or clip", .choices = kGamut,

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/client.hpp"
+#include "encode/display_target.hpp"
 #include "tools/common/progress_bar.hpp"
 #include "tools/hdrctl/options.hpp"
 
@@ -470,6 +471,13 @@ constexpr const char* kGlobalNote =
     "\nhdrctl's own options (--socket, --tcp, --token-file, --timeout, --json, -q) may also be given here.\n"
     "While a request takes longer than a second, hdrctl shows \"waiting for the daemon... N s\" on stderr.";
 
+// The display modes, as every --mode names them (hdrd selftest's patterns::suite_modes_text).
+std::string selftest_mode_help() {
+  std::string s;
+  for (auto m : hdrd::mode_names()) s += (s.empty() ? "" : ", ") + std::string(m);
+  return "Display mode: " + s;
+}
+
 std::string examples(std::initializer_list<const char*> lines) {
   std::string s = "Examples:\n";
   for (const char* l : lines) s += std::string("  ") + l + "\n";
@@ -533,7 +541,7 @@ int main(int argc, char** argv) {
 
   SelftestOptions so;
   auto* selftest = app.add_subcommand("selftest", "POST /v1/selftest: the daemon's display-mode suite for one mode");
-  selftest->add_option("--mode", so.mode, "sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb or hlg")->capture_default_str();
+  selftest->add_option("--mode", so.mode, selftest_mode_help())->capture_default_str();
   selftest->add_option("--peak", so.peak, "Display peak luminance, cd/m2 (default: the mode's)");
   selftest->add_flag("--no-render", so.no_render, "Skip the rendered built-in scenes");
   selftest->add_flag("--failed", so.failed_only, "Print only failed checks (text output)");
