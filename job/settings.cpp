@@ -275,6 +275,14 @@ std::vector<Setting> make_table() {
       {.path = "energy_compensation", .type = T::boolean, .sources = kRender,
        .doc = "GGX multiple-scattering energy compensation (false: single scattering, for comparison)",
        .default_json = "true", .flag = "--no-energy-compensation", .query = "energy_compensation"},
+      // glTF gives emission no unit. 1.0 = 100/pi cd/m2: a white diffuser's luminance under the
+      // default rig's 100 lux, which light-based exposure shows as paper white, so an emissive
+      // 1.0 surface looks white as glTF viewers show it (docs/scene-format.md "glTF files").
+      {.path = "gltf_emissive_nits", .type = T::number, .sources = kRender,
+       .doc = "Luminance of a glTF emissive value of 1.0 (emissiveFactor x KHR_materials_emissive_strength x texture); "
+              "the default, 100/pi, is a white diffuser's under the default rig's 100 lux (paper white)",
+       .unit = "cd/m2", .min = 0, .max = 1e7, .default_json = "31.830988618379067", .flag = "--gltf-emissive-nits",
+       .metavar = "NITS", .query = "gltf_emissive_nits"},
       {.path = "camera.position", .type = T::vec3, .sources = kRender, .doc = "Camera position (scene units, metres)",
        .max = 1e6, .default_doc = "the scene's", .flag = "--camera-position", .metavar = "X,Y,Z"},
       {.path = "camera.target", .type = T::vec3, .sources = kRender, .doc = "Point the camera looks at", .max = 1e6,

@@ -13,6 +13,7 @@
 #include "job/build.hpp"
 #include "job/frame_job.hpp"
 #include "shading/renderer.hpp"
+#include "shading/scene_loader.hpp"
 #include "tests/encode/io/png_util.hpp"
 #include "tests/testing/testing.hpp"
 
@@ -176,6 +177,26 @@ TEST(FrameJob, EncoderChoiceByRendererKind) {
   for (const auto& c : cases)
     EXPECT_EQ(choose_encoder(c.setting, c.kind, c.exr), c.want)
         << c.setting << " " << shading::to_string(c.kind) << (c.exr ? " exr" : "");
+}
+
+// Issue 29 item 11: glTF emission has a unit, gltf_emissive_nits, a setting like any other
+// (before, 1 cd/m2 fixed in the loader: emissive models looked unlit under the 100 lux rig).
+// Its default is a white diffuser's luminance under 100 lux, E / pi (the light-based
+// exposure's paper white), and the loader's own default is the same number.
+TEST(FrameJob, GltfEmissiveNitsIsASettingReachingTheLoader) {
+  const Setting* s = find_setting("gltf_emissive_nits");
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->default_value().get<double>(), 100 / M_PI, 1e-12);
+  EXPECT_EQ(s->default_value().get<double>(), shading::kGltfEmissiveNits);
+  EXPECT_EQ(shading::SceneLoadOptions{}.gltf_emissive_nits, shading::kGltfEmissiveNits);
+  for (double nits : {1.0, 203.0}) {
+    auto r = parse_request_json({{"scene", "material-grid"}, {"gltf_emissive_nits", nits}}, cli_context(Source::render));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(render_request(*r, {}).load.gltf_emissive_nits, nits);
+  }
+  auto d = parse_request_json({{"scene", "material-grid"}}, cli_context(Source::render));
+  ASSERT_TRUE(d.ok());
+  EXPECT_EQ(render_request(*d, {}).load.gltf_emissive_nits, shading::kGltfEmissiveNits);
 }
 
 TEST(FrameJob, OutputsAreCheckedAgainstTheResolvedMode) {

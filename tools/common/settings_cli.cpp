@@ -22,6 +22,7 @@ constexpr SettingGroup kSettingGroups[] = {
     {"samples", "Source"},        {"camera", "Source"},         {"start_s", "Source"},
     {"encoder", "Source"},        {"backend", "Source"},        {"input", "Source"},
     {"environment", "Environment"}, {"energy_compensation", "Environment"},
+    {"gltf_emissive_nits", "Source"},
     {"pattern", "Pattern"},       {"params", "Pattern"},
     {"frames", "Sequence"},       {"fps", "Sequence"},          {"images", "Sequence"},
     {"sequence", "Sequence"},     {"video", "Sequence"},        {"metadata", "Sequence"},
