@@ -120,7 +120,10 @@ json frame_body(const FrameOptions& o, const json& extra) {
 void add_sequence_options(CLI::App* app, SequenceOptions& o) {
   app->add_option("--request", o.request_file, "JSON request body to start from (file, or - for stdin)");
   app->add_option("--set", o.sets, "Any request field: key.path=JSON (repeatable)");
-  app->add_option("-o,--output", o.output, "When the job is done, download its video (else its sidecar) here");
+  app->add_option("-o,--output", o.output,
+                  "When the job is done, download its video (else its sidecar) here, then remove the job's files "
+                  "from the daemon's dump directory");
+  app->add_flag("--keep", o.keep, "With -o: keep the job's files in the daemon's dump directory after downloading");
   app->add_option("--format", o.formats, sequence_format_help());
   app->add_option("--name", o.name, "Base name of the files in the daemon's dump directory (default: generated)");
   app->add_flag("--detach", o.detach, "Print the job's id and return (follow it with hdrctl jobs show ID)");
