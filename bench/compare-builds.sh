@@ -25,7 +25,7 @@ if [ ${#revs[@]} -lt 2 ]; then echo "compare-builds.sh: give at least two revisi
 
 out=build-compare
 mkdir -p "$out"
-BUILD_DIR=build-release BUILD_TYPE=Release bash scripts/build.sh -DHDRD_BUILD_TESTS=OFF >/dev/null
+bash bench/build-release.sh build-release pair_encode hdrd_encode
 public_headers=$(g++ -std=c++20 -I. -MM -x c++ - <<<'#include "encode/pipeline.hpp"' | tr ' \\' '\n\n' | grep '^encode/' | sort -u)
 libs=()
 for rev in "${revs[@]}"; do

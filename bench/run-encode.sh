@@ -6,17 +6,24 @@
 # (medians of the repetitions; floor_ms is the 1-thread floor, floor_ms_2t the 2-thread
 # one), plus the ratios the targets are stated in, and for hdr10
 # and sdr zimg's times in the same run (zimg_ms_1t/2t, its code error, x_faster_than_zimg_2t).
-# env: BUILD_DIR (default build-release), REPS (default 7)
+# env: BUILD_DIR (default build-release), REPS (default 7), NO_BUILD=1 (time the build in
+#      BUILD_DIR as it is), BENCH_SMOKE=1 (CI: one repetition, one iteration per case; the
+#      numbers mean nothing, the script and the benchmark's names are what is checked)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
-BUILD_DIR=$build_dir BUILD_TYPE=Release bash scripts/build.sh -DHDRD_BUILD_TESTS=OFF >/dev/null
+bash bench/build-release.sh "$build_dir" bench_encode
+min_time=()
+if [ "${BENCH_SMOKE:-0}" = 1 ]; then
+  : "${REPS:=1}"
+  min_time=(--benchmark_min_time=0.001)
+fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 # Repetitions run in random order across the benchmarks, so a slow spell of the machine
 # does not fall on one side of a comparison.
 "$build_dir/bench/bench_encode" --benchmark_repetitions="${REPS:-7}" --benchmark_report_aggregates_only=true \
-  --benchmark_enable_random_interleaving=true \
+  --benchmark_enable_random_interleaving=true "${min_time[@]}" \
   --benchmark_format=json --benchmark_out="$out" --benchmark_out_format=json >&2
 python3 - "$out" <<'PY'
 import json, sys

@@ -20,10 +20,14 @@
 # (hdrd encode on a 16x16 EXR).
 # The last line is one JSON object with the medians, the breakdowns and the ratios the
 # targets are stated in (x_* = the other tool's time / hdrd's).
-# env: BUILD_DIR (default build-release), REPS (default 5), SIZES (default "4k 1080p")
+# env: BUILD_DIR (default build-release), REPS (default 5), SIZES (default "4k 1080p"),
+#      NO_BUILD=1 (time the build in BUILD_DIR as it is), BENCH_SMOKE=1 (CI: the 16x16 input,
+#      one repetition; a missing peer tool or fixture skips with exit 77 instead of installing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
+smoke=${BENCH_SMOKE:-0}
+if [ "$smoke" = 1 ]; then : "${REPS:=1}" "${SIZES:=tiny}"; fi
 bash bench/build-release.sh "$build_dir" hdrd bench_io bench_daemon
 build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
 
@@ -31,6 +35,10 @@ need=()
 command -v ffmpeg >/dev/null || need+=(ffmpeg)
 command -v oiiotool >/dev/null || need+=(openimageio-tools)
 command -v curl >/dev/null || need+=(curl)
+if [ ${#need[@]} -gt 0 ] && [ "$smoke" = 1 ]; then
+  echo "run-io: skipped: the peers ${need[*]} are missing (apt-get install ${need[*]})" >&2
+  exit 77
+fi
 if [ ${#need[@]} -gt 0 ]; then
   sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
   echo "run-io: installing ${need[*]}" >&2
@@ -39,11 +47,13 @@ fi
 
 shared=${HDRD_SHARED_DIR:-../shared}
 src="$shared/fixtures/exr/MtTamWest.exr"
-[ -f "$src" ] || { echo "run-io: $src missing (set HDRD_SHARED_DIR)" >&2; exit 1; }
+[ -f "$src" ] || { echo "run-io: $src missing (set HDRD_SHARED_DIR)" >&2; [ "$smoke" = 1 ] && exit 77; exit 1; }
 work="$build_dir/bench-io"
 mkdir -p "$work/in"
 for spec in 4k:3840x2160 1080p:1920x1080 tiny:16x16; do
   name=${spec%%:*}
+  # the tiny input is the process-start case's; the others only when timed
+  [ "$name" = tiny ] || [[ " ${SIZES:-4k 1080p} " == *" $name "* ]] || continue
   [ -f "$work/in/$name.exr" ] ||
     oiiotool "$src" --ch R,G,B --resize "${spec#*:}" -d half --compression zip -o "$work/in/$name.exr"
 done

@@ -20,16 +20,24 @@
 # Alternated (the video / no-video runs in a new random order each repetition), medians of
 # REPS. The last line is one JSON object.
 # env: BUILD_DIR (default build-release), REPS (default 3), SIZES (default "1080p 4k"),
-#      NO_BUILD=1 (time the build in BUILD_DIR as it is)
+#      NO_BUILD=1 (time the build in BUILD_DIR as it is), BENCH_SMOKE=1 (CI: the 64x32 pan,
+#      one repetition, a 2-frame 64x32 render, RSS over 12 and 4 frames; skips with exit 77
+#      without oiiotool or the fixture). Also RENDER ("WxHxFRAMES", default 1920x1080x4),
+#      RSS_SET (default small) and RSS_FRAMES (default "300 30").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
+if [ "${BENCH_SMOKE:-0}" = 1 ]; then
+  : "${REPS:=1}" "${SIZES:=tiny}" "${RENDER:=64x32x2}" "${RSS_SET:=tiny}" "${RSS_FRAMES:=12 4}"
+fi
+export RENDER=${RENDER:-1920x1080x4} RSS_SET=${RSS_SET:-small} RSS_FRAMES=${RSS_FRAMES:-300 30}
 bash bench/build-release.sh "$build_dir" hdrd
 build_type=$(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build_dir/CMakeCache.txt")
-command -v oiiotool >/dev/null || { echo "run-sequence: oiiotool missing (apt-get install openimageio-tools)" >&2; exit 1; }
+command -v oiiotool >/dev/null || { echo "run-sequence: oiiotool missing (apt-get install openimageio-tools)" >&2; exit 77; }
 
 work="$build_dir/bench-sequence"
-bash bench/make-pans.sh "$work"
+# shellcheck disable=SC2086
+bash bench/make-pans.sh "$work" $(printf '%s\n' ${SIZES:-1080p 4k} "$RSS_SET" | sort -u)
 
 exec python3 - "$build_dir" "$work" "${REPS:-3}" "${SIZES:-1080p 4k}" "$build_type" <<'PY'
 import json, os, random, shutil, statistics, subprocess, sys, tempfile, time
@@ -128,22 +136,25 @@ for size in sizes:
         "own_with_read_over_encoder": (own_work + split["read_cpu_without_video"]) / encoder_cpu if encoder_cpu > 0 else None,
     }
 
-# A render sequence at 1080p: where a rendered frame's time goes.
-w, c, j = run(["render", "--scene", "hdr", "--frames", "4", "--width", "1920", "--height", "1080", "--video", "hevc",
+# A render sequence (1080p unless RENDER says): where a rendered frame's time goes.
+rw, rh, rn = os.environ["RENDER"].split("x")
+w, c, j = run(["render", "--scene", "hdr", "--frames", rn, "--width", rw, "--height", rh, "--video", "hevc",
                "-o", os.path.join(scratch, "render")])
 n = j["frame_count"]
-result["render_1080p_ms_per_frame"] = {k: v / n for k, v in j["timings_ms"].items() if isinstance(v, (int, float))}
-result["render_1080p_ms_per_frame"]["wall"] = w / n * 1e3
+key = "render_1080p_ms_per_frame" if (rw, rh) == ("1920", "1080") else f"render_{rw}x{rh}_ms_per_frame"
+result[key] = {k: v / n for k, v in j["timings_ms"].items() if isinstance(v, (int, float))}
+result[key]["wall"] = w / n * 1e3
 for f in os.listdir(scratch):
     os.remove(os.path.join(scratch, f))
 
 # Resident memory over 300 frames (a list file cycling the 100 small frames) vs 30 frames.
 def rss_run(count):
     lst = os.path.join(scratch, f"list{count}.txt")
-    small = os.path.join(work, "small")
+    small = os.path.join(work, os.environ["RSS_SET"])
+    have = len([f for f in os.listdir(small) if f.startswith("pan.")])
     with open(lst, "w") as f:
         for i in range(count):
-            f.write(os.path.join(os.path.abspath(small), "pan.%03d.exr" % (i % 100)) + "\n")
+            f.write(os.path.join(os.path.abspath(small), "pan.%03d.exr" % (i % have)) + "\n")
     p = subprocess.Popen([hdrd, "encode", lst, "--video", "hevc", "-o", os.path.join(scratch, f"rss{count}"), "-q"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     samples = []
@@ -162,13 +173,17 @@ def rss_run(count):
 
 # The encoder fills its lookahead and frame threads over the first frames: compare the
 # second sixth of the run (frames ~50-100, after that warm-up) with the last (250-300).
-s300, s30 = rss_run(300), rss_run(30)
+long_n, short_n = (int(v) for v in os.environ["RSS_FRAMES"].split())
+s300, s30 = rss_run(long_n), rss_run(short_n)
+if not s300 or not s30:  # a run too short to sample (the smoke run's tiny frames)
+    s300, s30 = s300 or [0.0], s30 or [0.0]
 k = max(1, len(s300) // 6)
-result["rss_mb"] = {"300_frames": {"second_sixth_median": med(s300[k:2 * k]), "last_sixth_median": med(s300[-k:]),
-                                   "peak": max(s300)},
-                    "30_frames_peak": max(s30)}
-result["rss_mb"]["growth_last_over_second_sixth"] = result["rss_mb"]["300_frames"]["last_sixth_median"] / \
-    result["rss_mb"]["300_frames"]["second_sixth_median"]
+result["rss_mb"] = {f"{long_n}_frames": {"second_sixth_median": med(s300[k:2 * k]), "last_sixth_median": med(s300[-k:]),
+                                         "peak": max(s300)},
+                    f"{short_n}_frames_peak": max(s30)}
+second = result["rss_mb"][f"{long_n}_frames"]["second_sixth_median"]
+result["rss_mb"]["growth_last_over_second_sixth"] = \
+    result["rss_mb"][f"{long_n}_frames"]["last_sixth_median"] / second if second else None
 shutil.rmtree(scratch, ignore_errors=True)
 print(json.dumps(result))
 PY

@@ -6,25 +6,30 @@
 # is written in, and checks that every sharded result has the one-process frames. The frames
 # are the 1080p pan of bench/run-sequence.sh (24 crops of MtTamWest.exr), cycled to 240.
 # The last line is one JSON object.
-# env: BUILD_DIR (default build-release), FRAMES (240), SHARDS ("2 4"), NO_BUILD=1
+# env: BUILD_DIR (default build-release), FRAMES (240), SHARDS ("2 4"), PAN (the pan set,
+#      default 1080p), NO_BUILD=1, BENCH_SMOKE=1 (CI: 8 frames of the 64x32 pan in 2 shards;
+#      skips with exit 77 without oiiotool or the fixture)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${BUILD_DIR:-build-release}
+if [ "${BENCH_SMOKE:-0}" = 1 ]; then : "${FRAMES:=8}" "${SHARDS:=2}" "${PAN:=tiny}"; fi
+pan_set=${PAN:-1080p}
 bash bench/build-release.sh "$build_dir" hdrd
-pan_dir="$build_dir/bench-sequence/1080p"
-bash bench/make-pans.sh "$build_dir/bench-sequence"
-[ -f "$pan_dir/pan.023.exr" ] || { echo "run-shards: the 1080p pan is missing (bench/run-sequence.sh makes it)" >&2; exit 1; }
+pan_dir="$build_dir/bench-sequence/$pan_set"
+bash bench/make-pans.sh "$build_dir/bench-sequence" "$pan_set"
+[ -f "$pan_dir/pan.000.exr" ] || { echo "run-shards: the $pan_set pan is missing (bench/make-pans.sh makes it)" >&2; exit 1; }
 
 exec python3 - "$build_dir" "$pan_dir" "${FRAMES:-240}" "${SHARDS:-2 4}" <<'PY'
 import json, os, shutil, subprocess, sys, tempfile, time
 
 build, pan, frames, shard_counts = sys.argv[1], os.path.abspath(sys.argv[2]), int(sys.argv[3]), [int(s) for s in sys.argv[4].split()]
+pan_frames = len([f for f in os.listdir(pan) if f.startswith("pan.")])
 hdrd = os.path.join(build, "tools", "hdrd")
 work = tempfile.mkdtemp(prefix="hdrd-bench-shards-")
 lst = os.path.join(work, "frames.txt")
 with open(lst, "w") as f:
     for i in range(frames):
-        f.write(os.path.join(pan, "pan.%03d.exr" % (i % 24)) + "\n")
+        f.write(os.path.join(pan, "pan.%03d.exr" % (i % pan_frames)) + "\n")
 seq = ["encode", lst, "--video", "hevc", "--format", "raw"]
 
 def timed(*cmds):
@@ -40,7 +45,7 @@ def raw(base, i):
     with open(f"{base}.{i:05d}.raw", "rb") as f:
         return f.read()
 
-out = {"frames": frames, "size": "1920x1080", "codec": "hevc (x265 medium)", "cores": os.cpu_count()}
+out = {"frames": frames, "pan": os.path.basename(pan), "codec": "hevc (x265 medium)", "cores": os.cpu_count()}
 one = os.path.join(work, "one", "seq")
 os.makedirs(os.path.dirname(one))
 out["one_process_s"] = timed(seq + ["-o", one])

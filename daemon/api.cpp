@@ -327,7 +327,7 @@ void Service::get_capabilities(HttpRequest&, std::shared_ptr<Responder> responde
       {"asset_root", !cfg->paths.asset_root.empty()},
       {"dump", !cfg->paths.dump_dir.empty()},
       {"patterns", pattern_capabilities()},
-      {"selftest_modes", {"sdr-srgb", "sdr", "sdr-bt1886", "hdr10", "scrgb", "hlg"}},
+      {"selftest_modes", std::vector<std::string>(mode_names().begin(), mode_names().end())},
   };
   responder->reply(json_reply(j));
 }

@@ -26,7 +26,7 @@ namespace {
 // POST /v1/selftest's body: {"mode", "peak_nits", "render", "timeout_s"}, all optional (an
 // empty body is hdr10 at its default peak, as `hdrd selftest` without options).
 struct SelftestRequest {
-  std::string mode = "hdr10";             // sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb, hlg
+  std::string mode = "hdr10";             // a display mode (mode_names(), or an alias)
   std::optional<double> peak_nits;        // default: the mode's
   bool render = true;                     // also render the built-in scenes
   std::optional<double> timeout_s;
@@ -35,8 +35,6 @@ struct SelftestRequest {
             {"render", render}};
   }
 };
-
-constexpr std::string_view kSelftestModes[] = {"sdr-srgb", "sdr", "sdr-bt1886", "hdr10", "scrgb", "hlg"};
 
 Result<SelftestRequest> parse_selftest_request(std::string_view body, const job::Limits& limits) {
   SelftestRequest r;
@@ -49,9 +47,8 @@ Result<SelftestRequest> parse_selftest_request(std::string_view body, const job:
     const json& v = *it;
     const std::string shown = one_line(k.substr(0, 64));
     if (k == "mode") {
-      if (!v.is_string() || std::find(std::begin(kSelftestModes), std::end(kSelftestModes), v.get<std::string>()) ==
-                                std::end(kSelftestModes))
-        return make_error("request.value", "mode: one of sdr-srgb, sdr, sdr-bt1886, hdr10, scrgb, hlg", "mode");
+      if (!v.is_string() || !parse_mode(v.get<std::string>()))
+        return make_error("request.value", "mode: one of " + patterns::suite_modes_text(), "mode");
       r.mode = v.get<std::string>();
     } else if (k == "peak_nits" || k == "timeout_s") {
       const double max = k == "peak_nits" ? 10000 : limits.max_request_seconds;

@@ -318,7 +318,9 @@ void JobRegistry::finish(const std::shared_ptr<Job>& job, JobState state, std::o
     job->state = state;
     job->error = std::move(error);
     job->finished = SystemClock::now();
-    if (state == JobState::done && job->progress.fps <= 0 && job->started) {
+    // A finished job's fps is its average over the run, frames_done / elapsed_s (docs/api.md),
+    // not the last progress report's rate, which leaves out the set-up and the final mux.
+    if (job->started) {
       const double s = std::chrono::duration<double>(*job->finished - *job->started).count();
       job->progress.fps = s > 0 ? job->progress.frames_done / s : 0;
     }

@@ -229,6 +229,7 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
     rq.environment = env;
   }
   rq.energy_compensation = r.boolean("energy_compensation");
+  rq.load.gltf_emissive_nits = r.number("gltf_emissive_nits");
   rq.time_s = options.time_s.value_or(r.number("start_s"));
   rq.previous_time_s = options.previous_time_s;
   rq.load.base_dir = options.scene_base_dir;

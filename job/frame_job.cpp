@@ -279,7 +279,8 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
   if (where == "gpu" && st.settings->keep_display_nits)
     return make_error("request.conflict",
                       "encoder gpu: the exr output needs the display light only the CPU encoder keeps", "encoder");
-  const bool want_gpu = where == "gpu" || (where == "auto" && !st.settings->keep_display_nits);
+  const bool want_gpu = choose_encoder(where, shading::renderer_kind(r->gl_renderer), st.settings->keep_display_nits) ==
+                        EncoderChoice::gpu;
   if (want_gpu) {
     const auto t1 = Clock::now();
     auto enc = shading::GpuEncoder::create(renderer, *prepared);
@@ -586,6 +587,12 @@ Result<std::map<std::string, std::string>> write_outputs(const FrameResult& resu
   if (auto ok = io::write_all_or_nothing(files, {.durable = result.durable}); !ok) return ok.error();
   paths["sidecar"] = sidecar_path.string();
   return paths;
+}
+
+EncoderChoice choose_encoder(std::string_view setting, shading::RendererKind kind, bool needs_display_light) {
+  if (setting == "gpu") return EncoderChoice::gpu;
+  if (setting == "cpu" || needs_display_light) return EncoderChoice::cpu;
+  return kind == shading::RendererKind::software ? EncoderChoice::cpu : EncoderChoice::gpu;
 }
 
 }  // namespace hdrd::job

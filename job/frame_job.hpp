@@ -25,6 +25,7 @@
 #include "encode/result.hpp"
 #include "job/outputs.hpp"
 #include "job/request.hpp"
+#include "shading/gl_context.hpp"
 
 namespace hdrd::shading {
 class Renderer;
@@ -125,6 +126,14 @@ class FrameJob {
   explicit FrameJob(std::unique_ptr<State> s);
   std::unique_ptr<State> s_;
 };
+
+// Where a render is encoded. `setting` is the request's `encoder`: gpu and cpu as said;
+// auto: the CPU when an output needs the display light only the CPU encoder keeps (EXR) or
+// when a software rasteriser renders (there the generated program's table lookups cost more
+// than the CPU encoder and its readback of the float frame: docs/performance.md), else the
+// GPU pass, which spares the frame's readback. (gpu with an EXR output is refused before.)
+enum class EncoderChoice { cpu, gpu };
+EncoderChoice choose_encoder(std::string_view setting, shading::RendererKind kind, bool needs_display_light);
 
 // Runs both stages (the CLI; the renderer is made when the request needs one).
 Result<FrameResult> run_frame_job(FrameJob& job, shading::Renderer* renderer = nullptr);

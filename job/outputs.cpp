@@ -1,6 +1,7 @@
 #include "job/outputs.hpp"
 
 #include <algorithm>
+#include <cctype>
 
 #include <fmt/format.h>
 
@@ -37,7 +38,31 @@ const OutputInfo kOutputs[] = {
      false, false, false, true, true, &has_gain_map},
 };
 
-constexpr std::string_view kNames[] = {"png", "exr", "raw", "scene-exr", "heatmap", "avif", "jxl", "jpeg", "jpeg-gainmap"};
+// Extensions that are not an output's suffix but name one: the output whose suffix they spell.
+struct ExtensionAlias {
+  std::string_view extension, suffix;
+};
+constexpr ExtensionAlias kExtensionAliases[] = {{".jpeg", ".jpg"}, {".bin", ".raw"}};
+
+std::vector<std::string_view> make_names() {
+  std::vector<std::string_view> v;
+  for (const auto& o : kOutputs) v.push_back(o.name);
+  return v;
+}
+
+std::vector<std::string_view> make_extensions() {
+  std::vector<std::string_view> v;
+  for (const auto& o : kOutputs)
+    if (o.reply && std::find(v.begin(), v.end(), o.suffix) == v.end()) v.push_back(o.suffix);
+  for (const auto& a : kExtensionAliases) v.push_back(a.extension);
+  return v;
+}
+
+bool iequal(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+         });
+}
 
 }  // namespace
 
@@ -55,7 +80,31 @@ const OutputInfo* find_output(std::string_view name) {
   return nullptr;
 }
 
-std::span<const std::string_view> output_names() { return kNames; }
+std::span<const std::string_view> output_names() {
+  static const std::vector<std::string_view> names = make_names();
+  return names;
+}
+
+const OutputInfo* output_for_extension(std::string_view extension) {
+  std::string_view suffix = extension;
+  for (const auto& a : kExtensionAliases)
+    if (iequal(extension, a.extension)) suffix = a.suffix;
+  for (const auto& o : kOutputs)
+    if (o.reply && iequal(o.suffix, suffix)) return &o;
+  return nullptr;
+}
+
+std::span<const std::string_view> output_extensions() {
+  static const std::vector<std::string_view> extensions = make_extensions();
+  return extensions;
+}
+
+std::string reply_output_names() {
+  std::string s;
+  for (const auto& o : kOutputs)
+    if (o.reply) s += (s.empty() ? "" : ", ") + std::string(o.name);
+  return s;
+}
 
 bool applies(const OutputInfo& o, Source source, Mode mode) {
   return job::applies(o.sources, source) && (!o.for_mode || o.for_mode(mode));

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -37,6 +38,16 @@ std::span<const OutputInfo> outputs();
 const OutputInfo& output_info(Output o);
 const OutputInfo* find_output(std::string_view name);
 std::span<const std::string_view> output_names();  // the `formats` choices
+
+// A single file named by its extension (hdrctl -o FILE): each replyable output's suffix,
+// plus the other spellings people write (.jpeg, .bin), case-insensitive. ".jpg" names the
+// JPEG family (image/jpeg: jpeg in SDR, jpeg-gainmap in hdr10/hlg: the mode decides).
+// nullptr for an extension no output is written with.
+const OutputInfo* output_for_extension(std::string_view extension);
+// Every extension output_for_extension() knows, in table order: ".png", ".exr", ...
+std::span<const std::string_view> output_extensions();
+// "png, exr, raw, ..." of the outputs that can be a daemon reply (hdrctl's --format).
+std::string reply_output_names();
 bool applies(const OutputInfo& o, Source source, Mode mode);
 
 // The outputs of a dump that names none: every default one that applies.

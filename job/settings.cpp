@@ -99,7 +99,9 @@ std::vector<Setting> make_table() {
        .doc = "Curve parameters by name (ranges: hdrd tonemap --list)", .min = -1e9, .max = 1e9,
        .default_doc = "each parameter's default", .flag = "--tonemap-param", .metavar = "NAME=VALUE"},
       {.path = "tone.apply", .type = T::choice, .sources = kSceneReferred,
-       .doc = "How a scalar curve applies: per-channel, max-rgb or luminance", .choices = kApply,
+       .doc = "How the curve applies to RGB: per-channel, max-rgb or luminance (a scalar curve), or rgb (the curve's "
+              "own RGB operator, the only way an RGB operator such as agx applies)",
+       .choices = kApply,
        .default_doc = "the curve's", .flag = "--tonemap-apply", .metavar = "HOW", .query = "apply"},
       {.path = "gamut", .type = T::choice, .sources = kSceneReferred,
        .doc = "Gamut mapping after tone mapping: ictcp (constant hue) or clip", .choices = kGamut,
@@ -274,6 +276,14 @@ std::vector<Setting> make_table() {
       {.path = "energy_compensation", .type = T::boolean, .sources = kRender,
        .doc = "GGX multiple-scattering energy compensation (false: single scattering, for comparison)",
        .default_json = "true", .flag = "--no-energy-compensation", .query = "energy_compensation"},
+      // glTF gives emission no unit. 1.0 = 100/pi cd/m2: a white diffuser's luminance under the
+      // default rig's 100 lux, which light-based exposure shows as paper white, so an emissive
+      // 1.0 surface looks white as glTF viewers show it (docs/scene-format.md "glTF files").
+      {.path = "gltf_emissive_nits", .type = T::number, .sources = kRender,
+       .doc = "Luminance of a glTF emissive value of 1.0 (emissiveFactor x KHR_materials_emissive_strength x texture); "
+              "the default, 100/pi, is a white diffuser's under the default rig's 100 lux (paper white)",
+       .unit = "cd/m2", .min = 0, .max = 1e7, .default_json = "31.830988618379067", .flag = "--gltf-emissive-nits",
+       .metavar = "NITS", .query = "gltf_emissive_nits"},
       {.path = "camera.position", .type = T::vec3, .sources = kRender, .doc = "Camera position (scene units, metres)",
        .max = 1e6, .default_doc = "the scene's", .flag = "--camera-position", .metavar = "X,Y,Z"},
       {.path = "camera.target", .type = T::vec3, .sources = kRender, .doc = "Point the camera looks at", .max = 1e6,
@@ -282,8 +292,9 @@ std::vector<Setting> make_table() {
        .unit = "deg", .min = 1, .max = 179, .default_doc = "the scene's", .flag = "--fov", .metavar = "DEG",
        .query = "fov_y_deg"},
       {.path = "encoder", .type = T::choice, .sources = kRender,
-       .doc = "Where a render is encoded: auto = on the GPU when its program covers the request and no output needs "
-              "the CPU's display light (EXR), else the CPU",
+       .doc = "Where a render is encoded: auto = the GPU pass on a hardware GPU when its program covers the request "
+              "and no output needs the CPU's display light (EXR); the CPU otherwise, and on a software rasteriser "
+              "(llvmpipe), where the CPU encoder is faster",
        .choices = kEncoder, .default_json = "\"auto\"", .flag = "--encoder", .metavar = "WHERE", .query = "encoder"},
       {.path = "input", .type = T::choice, .sources = kEncode, .doc = "How the EXR's values are meant (REFERENCE.md §1.1)",
        .choices = kInputUnits, .default_doc = "absolute when the file has whiteLuminance, else relative",

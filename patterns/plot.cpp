@@ -35,11 +35,13 @@ void Canvas8::fill(int x0, int y0, int x1, int y1, Rgb8 c) {
 }
 
 // Steps along the line one pixel at a time (DDA), stamping a square of `thickness`.
-void Canvas8::line(double x0, double y0, double x1, double y1, Rgb8 c, int thickness, int dash) {
+void Canvas8::line(double x0, double y0, double x1, double y1, Rgb8 c, int thickness, int dash, double* dash_phase) {
   const double dx = x1 - x0, dy = y1 - y0;
   const int n = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(dx), std::abs(dy)))));
+  const double step = std::hypot(dx, dy) / n, start = dash_phase ? *dash_phase : 0;
+  if (dash_phase) *dash_phase = start + step * n;
   for (int i = 0; i <= n; ++i) {
-    if (dash > 0 && (i / dash) % 2 == 1) continue;
+    if (dash > 0 && static_cast<long long>(std::floor((start + step * i) / dash)) % 2 == 1) continue;
     const int x = static_cast<int>(std::lround(x0 + dx * i / n)), y = static_cast<int>(std::lround(y0 + dy * i / n));
     fill(x - thickness / 2, y - thickness / 2, x - thickness / 2 + thickness, y - thickness / 2 + thickness, c);
   }
@@ -100,6 +102,9 @@ std::string tick_label(double v) {
   if (std::abs(v) >= 1) return fmt::format("{:g}", v);
   return fmt::format("{:g}", v);
 }
+std::string dash_attribute(int dash) {
+  return dash > 0 ? fmt::format(" stroke-dasharray=\"{},{}\"", dash, dash) : std::string();
+}
 std::string hex(Rgb8 c) { return fmt::format("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]); }
 std::string xml_escape(const std::string& s) {
   std::string o;
@@ -151,11 +156,11 @@ std::string render_svg(const Plot& p) {
       if (inside(p, x, y)) pts += fmt::format("{:.1f},{:.1f} ", map_x(p, f, x), map_y(p, f, y));
     s += fmt::format("<polyline class=\"series\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"{} points=\"{}\">"
                      "<title>{}</title></polyline>\n",
-                     hex(se.colour), se.dashed ? " stroke-dasharray=\"5,3\"" : "", pts, xml_escape(se.name));
+                     hex(se.colour), dash_attribute(se.dash), pts, xml_escape(se.name));
     const auto [lx, ly] = legend_pos(p, f, i);
     s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" stroke-width=\"2\"{}/>"
                      "<text class=\"legend\" x=\"{}\" y=\"{}\">{}</text>\n",
-                     lx, ly - 4, lx + 18, ly - 4, hex(se.colour), se.dashed ? " stroke-dasharray=\"5,3\"" : "", lx + 22,
+                     lx, ly - 4, lx + 18, ly - 4, hex(se.colour), dash_attribute(se.dash), lx + 22,
                      ly, xml_escape(se.name));
   }
   return s + "</svg>\n";
@@ -183,15 +188,16 @@ Canvas8 render_raster(const Plot& p) {
   for (std::size_t i = 0; i < p.series.size(); ++i) {
     const Series& se = p.series[i];
     bool have = false;
-    double px = 0, py = 0;
+    double px = 0, py = 0, phase = 0;
     for (const auto& [x, y] : se.points) {
       if (!inside(p, x, y)) { have = false; continue; }
       const double qx = map_x(p, f, x), qy = map_y(p, f, y);
-      if (have) c.line(px, py, qx, qy, se.colour, 2, se.dashed ? 4 : 0);
+      if (have) c.line(px, py, qx, qy, se.colour, 2, se.dash, &phase);
       px = qx, py = qy, have = true;
     }
     const auto [lx, ly] = legend_pos(p, f, i);
-    c.line(lx, ly - 3, lx + 18, ly - 3, se.colour, 2, se.dashed ? 3 : 0);
+    // The legend's sample is long enough to show two dashes of the longest pattern.
+    c.line(lx, ly - 3, lx + 18, ly - 3, se.colour, 2, std::min(se.dash, 5));
     c.text(se.name, int(lx) + 22, int(ly) - 6, black);
   }
   return c;
@@ -199,12 +205,19 @@ Canvas8 render_raster(const Plot& p) {
 
 // ---- Tone curves and Fresnel -------------------------------------------------------------
 namespace {
+// Tableau 10, black and three dark tones of d3's category20b: apart on white and from one
+// another (Tableau 20's light tones, used before, are too pale for 2-pixel lines).
 constexpr Rgb8 kPalette[] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},  {148, 103, 189},
                              {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207},
-                             {0, 0, 0},      {174, 199, 232}, {255, 187, 120}, {152, 223, 138}, {255, 152, 150}};
-constexpr std::size_t kPaletteSize = std::size(kPalette);
-Rgb8 palette(std::size_t i) { return kPalette[i % kPaletteSize]; }
+                             {0, 0, 0},      {57, 59, 121},   {132, 60, 57},  {99, 121, 57}};
+static_assert(std::size(kPalette) == kPlotColours);
+constexpr int kDashes[] = {0, 8, 3};  // solid, long dashes, short dashes
+Rgb8 palette(std::size_t i) { return kPalette[i % kPlotColours]; }
 }  // namespace
+
+SeriesStyle series_style(std::size_t i) {
+  return {palette(i), kDashes[(i / kPlotColours) % std::size(kDashes)]};
+}
 
 Plot tone_curves_plot(double peak, double pw, double black) {
   Plot p;
@@ -225,9 +238,9 @@ Plot tone_curves_plot(double peak, double pw, double black) {
   for (const auto& info : tonemap::curves()) {
     auto curve = tonemap::prepare(info.name, d);
     if (!curve) continue;
-    // More curves than distinct colours: the second round of the palette is dashed.
-    Series s{std::string(info.name), palette(i), {}, i >= kPaletteSize};
-    ++i;
+    // More curves than distinct colours: the next rounds of the palette are dashed.
+    const SeriesStyle style = series_style(i++);
+    Series s{std::string(info.name), style.colour, {}, style.dash};
     for (int k = 0; k <= 300; ++k) {
       const double x = std::pow(10.0, -3 + 6.0 * k / 300);
       s.points.push_back({x, (*curve)->map(x) * pw});
@@ -274,7 +287,7 @@ Plot fresnel_plot() {
     if (!m.f0_water) continue;  // n (hence k) known only where table 9.4 gives in-water F0
     const auto n = shading::preset_metal_n(m);
     const double nn[3] = {n.x, n.y, n.z};
-    Series exact{std::string(m.name) + " exact", col, {}, true};
+    Series exact{std::string(m.name) + " exact", col, {}, 5};
     for (int i = 0; i <= 200; ++i) {
       const double s = i / 200.0, ct = std::sqrt(std::max(0.0, 1 - s * s));
       double f = 0;

@@ -25,7 +25,11 @@ struct Canvas8 {
   void set(int x, int y, Rgb8 c);
   Rgb8 get(int x, int y) const;
   void fill(int x0, int y0, int x1, int y1, Rgb8 c);
-  void line(double x0, double y0, double x1, double y1, Rgb8 c, int thickness = 1, int dash = 0);
+  // dash > 0: dash pixels on, dash off, measured along the line from *dash_phase (pixels of
+  // line drawn before: a polyline passes it from segment to segment, so a dash pattern runs
+  // on across segments shorter than a dash); advanced by this segment's length.
+  void line(double x0, double y0, double x1, double y1, Rgb8 c, int thickness = 1, int dash = 0,
+            double* dash_phase = nullptr);
   void text(const std::string& s, int x, int y, Rgb8 c, int scale = 1);
   EncodedFrame to_frame() const;  // 8-bit sRGB XRGB8888
   Result<std::vector<std::uint8_t>> png() const;
@@ -35,8 +39,18 @@ struct Series {
   std::string name;
   Rgb8 colour;
   std::vector<std::array<double, 2>> points;
-  bool dashed = false;
+  int dash = 0;  // 0: solid; else the on/off length in pixels (SVG stroke-dasharray, raster alike)
 };
+
+// The line style of a plot's series i: a distinct colour for each of the first
+// kPlotColours, then the same colours again with longer and shorter dashes, so that no two
+// of up to 3 x kPlotColours series share colour and dash.
+inline constexpr int kPlotColours = 14;
+struct SeriesStyle {
+  Rgb8 colour;
+  int dash;
+};
+SeriesStyle series_style(std::size_t i);
 
 struct Plot {
   std::string title, x_label, y_label;

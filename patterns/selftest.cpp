@@ -287,10 +287,15 @@ nlohmann::json Report::to_json() const {
   return j;
 }
 
+std::string suite_modes_text() {
+  std::string s;
+  for (auto m : mode_names()) s += (s.empty() ? "" : ", ") + std::string(m);
+  return s;
+}
+
 Result<DisplayTarget> suite_target(std::string_view mode, std::optional<double> peak) {
-  const std::string m = mode == "sdr-srgb" ? "sdr" : std::string(mode);
-  const auto parsed = parse_mode(m);
-  if (!parsed) return make_error("selftest.mode", fmt::format("unknown mode '{}' (sdr-srgb, sdr-bt1886, hdr10, scrgb, hlg)", mode), "mode");
+  const auto parsed = parse_mode(mode);
+  if (!parsed) return make_error("selftest.mode", fmt::format("unknown mode '{}' ({})", mode, suite_modes_text()), "mode");
   DisplayTarget t = default_target(*parsed);
   if (peak) t.peak_nits = *peak;
   if (auto ok = validate(t); !ok) return ok.error();

@@ -27,7 +27,7 @@ struct Check {
 };
 
 struct Report {
-  std::string mode;  // "hdr10", "sdr-srgb", ...
+  std::string mode;  // "hdr10", "sdr", ...
   DisplayTarget target;
   std::vector<Check> checks;
   double seconds = 0;
@@ -36,8 +36,11 @@ struct Report {
   nlohmann::json to_json() const;
 };
 
-// "sdr-srgb" (or "sdr"), "sdr-bt1886", "hdr10", "scrgb", "hlg" with an optional peak.
+// A display mode (mode_names(): the vocabulary of every --mode; the modes' aliases are
+// accepted too) with an optional peak.
 Result<DisplayTarget> suite_target(std::string_view mode, std::optional<double> peak_nits);
+// "hdr10, hlg, scrgb, sdr, sdr-bt1886": mode_names() as help and errors list them.
+std::string suite_modes_text();
 
 // ---- Check functions ----------------------------------------------------------------------
 // The frame is a uniform patch of relative 1.0 (paper white) encoded with `curve`: its

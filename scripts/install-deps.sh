@@ -18,6 +18,9 @@ packages=(
   libavif-dev libjxl-dev libjpeg62-turbo-dev
   # decoders the tests read the files back with (they skip without them)
   libavif-bin libheif-examples libjxl-tools libjpeg-turbo-progs ffmpeg libimage-exiftool-perl
+  # the benchmarks' peer and input maker (bench/run-io.sh, bench/make-pans.sh; their CI smoke
+  # runs skip without it)
+  openimageio-tools
 )
 
 missing=()

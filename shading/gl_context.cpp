@@ -1,8 +1,20 @@
 #include "shading/gl_context.hpp"
 
+#include <cctype>
+
 #include <fmt/format.h>
 
 namespace hdrd::shading {
+
+RendererKind renderer_kind(std::string_view gl_renderer) {
+  std::string lower(gl_renderer);
+  for (auto& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (std::string_view software : {"llvmpipe", "softpipe", "swrast", "swiftshader", "software rasterizer"})
+    if (lower.find(software) != std::string::npos) return RendererKind::software;
+  return RendererKind::hardware;
+}
+
+std::string_view to_string(RendererKind k) { return k == RendererKind::software ? "software" : "hardware"; }
 
 std::string_view to_string(Backend b) {
   switch (b) {

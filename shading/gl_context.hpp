@@ -20,7 +20,13 @@ enum class Backend { automatic, egl, egl_device, egl_surfaceless, osmesa };
 std::string_view to_string(Backend b);  // "auto", "egl", "egl-device", "egl-surfaceless", "osmesa"
 std::optional<Backend> parse_backend(std::string_view s);
 
-enum class GlFlavor { automatic, desktop, gles };  // automatic: desktop 4.5 core, else GLES 3.2
+enum class GlFlavor { automatic, desktop, gles };
+
+// What rasterises: a GPU, or the CPU through a software rasteriser (Mesa's llvmpipe, softpipe
+// and swrast, SwiftShader), told by GL_RENDERER. The encoder rule differs (job::choose_encoder).
+enum class RendererKind { hardware, software };
+RendererKind renderer_kind(std::string_view gl_renderer);
+std::string_view to_string(RendererKind k);  // "hardware", "software"  // automatic: desktop 4.5 core, else GLES 3.2
 
 struct ContextOptions {
   Backend backend = Backend::automatic;

@@ -16,6 +16,11 @@
 
 namespace hdrd::shading {
 
+// 100/pi cd/m2: the luminance of a white diffuser under the default rig's 100 lux key light,
+// which light-based exposure maps to paper white (the settings table's default; a test keeps
+// them equal).
+inline constexpr double kGltfEmissiveNits = 31.830988618379067;
+
 struct SceneLoadOptions {
   std::filesystem::path base_dir = ".";  // relative paths in JSON scenes resolve against this
   // false: a scene may not reach other files on its own: JSON scenes may not import glTF
@@ -24,9 +29,9 @@ struct SceneLoadOptions {
   bool allow_files = true;
   SceneLimits limits;
   // Luminance of a glTF emissive value of 1.0 (emissiveFactor x emissive_strength x
-  // texture): 1 cd/m2, the "nits" reading that Blender's glTF I/O uses in its standard
-  // lighting mode. glTF itself does not fix the unit.
-  double gltf_emissive_nits = 1.0;
+  // texture). glTF itself does not fix the unit; the request's gltf_emissive_nits (the
+  // settings table, default kGltfEmissiveNits) sets it.
+  double gltf_emissive_nits = kGltfEmissiveNits;
   // A glTF file without lights gets a default rig (100 lux key light, 10 cd/m2 ambient);
   // false when an environment lights it (RenderRequest::environment): then it gets
   // exactly its own lights.

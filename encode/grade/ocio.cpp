@@ -339,10 +339,13 @@ Result<ConfigGrade> load_config_grade(const grade::GradeSettings& s, double targ
 // ---- ACES output transforms as tone curves -----------------------------------------------
 const std::vector<AcesOutput>& aces_outputs() {
   static const std::vector<AcesOutput> v = {
-      {"aces-ocio-sdr-video", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - SDR-VIDEO_1.0", 100, 100},
-      {"aces-ocio-hdr-1000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-1000nit-15nit-REC2020lim_1.1", 1000, 100},
-      {"aces-ocio-hdr-2000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-2000nit-15nit-REC2020lim_1.1", 2000, 100},
-      {"aces-ocio-hdr-4000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-4000nit-15nit-REC2020lim_1.1", 4000, 100},
+      {"aces-ocio-sdr-video", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - SDR-VIDEO_1.0", 100, 100, &color::kRec709},
+      {"aces-ocio-hdr-1000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-1000nit-15nit-REC2020lim_1.1", 1000, 100,
+       &color::kRec2020},
+      {"aces-ocio-hdr-2000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-2000nit-15nit-REC2020lim_1.1", 2000, 100,
+       &color::kRec2020},
+      {"aces-ocio-hdr-4000", "ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - HDR-VIDEO-4000nit-15nit-REC2020lim_1.1", 4000, 100,
+       &color::kRec2020},
   };
   return v;
 }
@@ -371,24 +374,29 @@ class AcesCurve final : public tonemap::Curve {
  public:
   AcesCurve(std::size_t index, const tonemap::Display& d)
       : cpu_(aces_processor(index)),
-        to_rec2020_(color::xyz_to_rgb(color::kRec2020)),
+        to_display_(color::xyz_to_rgb(*aces_outputs()[index].display_primaries)),
+        display_to_rec2020_(color::rgb_to_rgb(*aces_outputs()[index].display_primaries, color::kRec2020)),
         scale_(aces_outputs()[index].unit_nits / d.paper_white_nits),
+        transform_max_(aces_outputs()[index].peak_nits / aces_outputs()[index].unit_nits),
         max_y_(d.max_y()) {}
   double map(double x) const override { return map_rgb({x, x, x}, tonemap::Apply::rgb).y; }
-  // Fixed-peak transform: on a display dimmer than its peak the excess is clipped per
-  // channel (the registry's rule: no curve exceeds the display peak).
+  // Fixed-peak transform: the output transform's own clip to its peak in its display
+  // primaries, then, on a display dimmer than that peak, the excess clipped per channel
+  // (the registry's rule: no curve exceeds the display peak).
   Vec3 map_rgb(Vec3 rgb, tonemap::Apply) const override {
     float px[3] = {float(std::max(rgb.x, 0.0)), float(std::max(rgb.y, 0.0)), float(std::max(rgb.z, 0.0))};
     cpu_->applyRGB(px);
-    const Vec3 out = to_rec2020_ * Vec3{px[0], px[1], px[2]} * scale_;
+    const Vec3 d = to_display_ * Vec3{px[0], px[1], px[2]};
+    const auto odt_clip = [&](double v) { return std::clamp(v, 0.0, transform_max_); };
+    const Vec3 out = display_to_rec2020_ * Vec3{odt_clip(d.x), odt_clip(d.y), odt_clip(d.z)} * scale_;
     const auto clip = [&](double v) { return std::clamp(v, 0.0, max_y_); };
     return {clip(out.x), clip(out.y), clip(out.z)};
   }
 
  private:
   OCIO::ConstCPUProcessorRcPtr cpu_;
-  color::Mat3 to_rec2020_;
-  double scale_, max_y_;
+  color::Mat3 to_display_, display_to_rec2020_;
+  double scale_, transform_max_, max_y_;
 };
 
 template <std::size_t I>

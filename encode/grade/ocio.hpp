@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "encode/colour/color.hpp"
 #include "encode/grade/grade.hpp"
 #include "encode/grade/lut.hpp"
 #include "encode/result.hpp"
@@ -63,6 +64,11 @@ struct AcesOutput {
   const char* builtin;      // OCIO 2.1 BuiltinTransform style
   double peak_nits;         // the transform's fixed display peak
   double unit_nits;         // nits of output XYZ Y = 1 (100 for the HDR and SDR video ones)
+  // The output transform's display primaries. Its last step clips each linear channel there
+  // to [0, peak] (ACES 1.0 ODT.Academy.Rec709_100nits_dim.ctl: clamp_f3(linearCV, 0., 1.));
+  // OCIO's built-in stops at XYZ before that clip, and its tone scale rises on above the
+  // peak (the ODT spline's slopeHigh of 0.04), so the curve applies the clip itself.
+  const color::Primaries* display_primaries;
 };
 const std::vector<AcesOutput>& aces_outputs();
 // Registers every aces_outputs() entry with tonemap::register_curve (idempotent). Also

@@ -275,6 +275,19 @@ TEST_F(SequencesTest, DeleteOfAFinishedJobRemovesItsFiles) {
     EXPECT_NE(e.path().filename().string().rfind("todelete", 0), 0u) << "left behind: " << e.path();
 }
 
+// Issue 29 item 15: a finished job reported the last progress rate (62.4 fps for 30 frames
+// in 1.09 s); docs/api.md: a finished job's fps is its average, frames_done / elapsed_s.
+TEST_F(SequencesTest, AFinishedJobReportsItsAverageFps) {
+  auto c = daemon_->client();
+  const json job = wait_final(c, submit(c, encode_request("fps")).value("id", ""));
+  ASSERT_EQ(job.value("state", ""), "done") << job.dump(2);
+  const double elapsed = job.value("elapsed_s", 0.0);
+  ASSERT_GT(elapsed, 0);
+  EXPECT_NEAR(job.value("fps", 0.0), job.value("frames_done", 0) / elapsed, 1e-6 * job.value("fps", 0.0) + 1e-9)
+      << job.dump(2);
+  EXPECT_EQ(job.value("eta_s", -1.0), 0.0);
+}
+
 TEST_F(SequencesTest, AFailedJobSaysWhyAndLeavesNoFiles) {
   auto c = daemon_->client();
   const json job = wait_final(c, submit(c, {{"images", "bad/b.%04d.exr"}, {"name", "broken"}, {"formats", {"png"}}})
@@ -304,10 +317,30 @@ TEST_F(SequencesTest, Hdrctl) {
   const std::string base = fmt::format("'{}' --socket '{}' ", hdrctl.string(), daemon_->socket().string());
   TempDir tmp;
   auto r = run_command(base + "sequence encode 'shot/shot.%04d.exr' --mode hdr10 --video hevc --preset ultrafast "
-                              "--name ctl -o '" + (tmp / "ctl.mp4").string() + "'");
+                              "--name ctl --keep -o '" + (tmp / "ctl.mp4").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("6 frames"), std::string::npos) << r.out;
   EXPECT_EQ(read_file(tmp / "ctl.mp4"), read_file(daemon_->dumps() / "ctl.mp4"));
+  // Issue 29 item 15: without --keep, a download leaves none of the job's files behind in the
+  // dump directory (they piled up there, one set per hdrctl sequence -o).
+  auto dump_files = [&](const std::string& prefix) {
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(daemon_->dumps()))
+      if (e.path().filename().string().rfind(prefix, 0) == 0) left.push_back(e.path().filename().string());
+    return left;
+  };
+  r = run_command(base + "--json sequence encode 'shot/shot.%04d.exr' --mode hdr10 --video hevc --preset ultrafast "
+                         "--format raw --name tidy -o '" + (tmp / "tidy.mp4").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_GT(fs::file_size(tmp / "tidy.mp4"), 0u);
+  EXPECT_TRUE(dump_files("tidy").empty()) << dump_files("tidy").front();
+  EXPECT_TRUE(json::parse(r.out, nullptr, false).value("files_removed", false)) << r.out;
+  // A generated name (sequence-<ms>-<pid>-<n>) alike.
+  const auto before = dump_files("sequence-").size();
+  r = run_command(base + "sequence encode 'shot/shot.%04d.exr' --video hevc --preset ultrafast -o '" +
+                  (tmp / "gen.mp4").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_EQ(dump_files("sequence-").size(), before);
   r = run_command(base + "sequence encode 'shot/shot.%04d.exr' --name ctl2 --detach");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string id = r.out.substr(0, r.out.find_first_of("\n"));

@@ -229,6 +229,28 @@ TEST(EncodeCli, BadInputGetsOneClearLineAndNoFiles) {
   }
 }
 
+// Issue 29 item 14: `selftest --mode` said "sdr-srgb (or sdr)" where every other --mode says
+// sdr: its help lists the display modes as display.mode does, and the alias still works.
+TEST(EncodeCli, SelftestModeHelpUsesTheModesVocabulary) {
+  const auto h = run_command(hdrd() + " selftest --help");
+  ASSERT_EQ(h.exit_code, 0);
+  const auto at = h.out.find("--mode");
+  ASSERT_NE(at, std::string::npos) << h.out;
+  const std::string line = h.out.substr(at, h.out.find('\n', at) - at);
+  EXPECT_NE(line.find("hdr10, hlg, scrgb, sdr, sdr-bt1886"), std::string::npos) << line;
+  EXPECT_EQ(h.out.find("sdr-srgb"), std::string::npos) << h.out;
+  // --no-* flags of render say what they turn off (settings_cli_test checks every one).
+  const auto r = run_command(hdrd() + " render --help");
+  const auto nl = r.out.find("--no-energy-compensation");
+  ASSERT_NE(nl, std::string::npos);
+  EXPECT_NE(r.out.substr(nl, 120).find("Turn off energy_compensation"), std::string::npos) << r.out.substr(nl, 200);
+  // --environment under its own heading, not "Output:".
+  const auto env = r.out.find("--environment ");
+  const auto env_head = r.out.rfind("\nEnvironment:", env), out_head = r.out.rfind("\nOutput:", env);
+  ASSERT_NE(env_head, std::string::npos) << r.out;
+  EXPECT_TRUE(out_head == std::string::npos || out_head < env_head) << r.out;
+}
+
 TEST(EncodeCli, HelpHasExamplesAndTonemapListsTheRegistry) {
   const auto r = run_command(hdrd() + " encode --help");
   EXPECT_EQ(r.exit_code, 0);

@@ -280,5 +280,40 @@ TEST_F(FrontEnds, SameRequestSameFrameEverywhere) {
   }
 }
 
+// hdrctl -o FILE: the extension names the format by job/outputs' one table (before issue 29,
+// .jpg and every unknown extension silently gave a PNG). Oracles: each file's own magic
+// bytes (ISO/IEC 10918-1 SOI, the PNG signature, the EXR magic) and the exit status.
+TEST_F(FrontEnds, HdrctlOutputExtensionPicksTheFormat) {
+  const std::string base = fmt::format("{} --socket {} -q pattern window --width 64 --height 36 ",
+                                       (binary_dir() / "tools/hdrctl/hdrctl").string(), daemon_->socket().string());
+  struct Want {
+    const char* file;
+    const char* mode;
+    std::string magic;
+  };
+  const std::string jpeg_soi = "\xFF\xD8\xFF", png_sig = "\x89PNG\r\n\x1A\n", exr_magic = "\x76\x2F\x31\x01";
+  const Want wants[] = {{"f.jpg", "sdr", jpeg_soi},   {"f.jpeg", "sdr", jpeg_soi}, {"F.JPG", "sdr", jpeg_soi},
+                        {"f.png", "hdr10", png_sig}, {"f.exr", "scrgb", exr_magic}};
+  for (const auto& w : wants) {
+    const fs::path out = dir_ / w.file;
+    const auto r = run_command(base + "--mode " + w.mode + " -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << w.file << ": " << r.err;
+    EXPECT_EQ(read_file(out).substr(0, w.magic.size()), w.magic) << w.file;
+  }
+  // An extension no format is written as: exit 2, nothing written, the known ones named.
+  const auto r = run_command(base + "--mode sdr -o " + (dir_ / "f.heic").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "f.heic"));
+  for (const char* known : {".png", ".exr", ".raw", ".avif", ".jxl", ".jpg", ".jpeg"})
+    EXPECT_NE(r.err.find(known), std::string::npos) << known << " not named in: " << r.err;
+  // --format's help names every format a reply can be.
+  const auto help = run_command(fmt::format("{} render --help", (binary_dir() / "tools/hdrctl/hdrctl").string()));
+  for (const char* f : {"png", "exr", "raw", "avif", "jxl", "jpeg", "jpeg-gainmap"})
+    EXPECT_NE(help.out.find(f), std::string::npos) << f;
+  const auto fpos = help.out.find("--format");
+  ASSERT_NE(fpos, std::string::npos);
+  EXPECT_NE(help.out.find("jpeg-gainmap", fpos), std::string::npos) << help.out.substr(fpos, 400);
+}
+
 }  // namespace
 }  // namespace hdrd::testing

@@ -216,6 +216,21 @@ TEST(SequenceCli, Hdr10PlusJsonIsWithinSt2094_40) {
   }
 }
 
+// Issue 29 item 15: an EXR sequence's summary said "render 0.0 ms" and never the read time.
+// Its per-frame line names the stages it ran: read, not render.
+TEST(SequenceCli, ExrSequenceSummaryGivesTheReadTimeAndNoRender) {
+  TempDir d;
+  write_shots(d.path(), 3);
+  const auto r = run_command(fmt::format("'{}' encode '{}' --mode hdr10 --format raw -o '{}'", hdrd(),
+                                         (d / "s.%d.exr").string(), (d / "seq").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto line = r.err.find("per frame: ");
+  ASSERT_NE(line, std::string::npos) << r.err;
+  const std::string per_frame = r.err.substr(line, r.err.find('\n', line) - line);
+  EXPECT_NE(per_frame.find("read "), std::string::npos) << per_frame;
+  EXPECT_EQ(per_frame.find("render"), std::string::npos) << per_frame;
+}
+
 TEST(SequenceCli, ErrorsAreOneLineAndLeaveNothing) {
   TempDir d;
   fs::create_directory(d / "in");

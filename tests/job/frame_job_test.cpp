@@ -3,6 +3,7 @@
 // outputs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -12,6 +13,7 @@
 #include "job/build.hpp"
 #include "job/frame_job.hpp"
 #include "shading/renderer.hpp"
+#include "shading/scene_loader.hpp"
 #include "tests/encode/io/png_util.hpp"
 #include "tests/testing/testing.hpp"
 
@@ -142,6 +144,59 @@ TEST(FrameJob, ExposureRule) {
   EXPECT_EQ(exposure_mode(req(Source::render, R"({"exposure":{"mode":"log-average"}})"), true),
             exposure::Mode::log_average)
       << "a mode given is the mode used";
+}
+
+// Issue 29 item 16: --encoder auto took the GPU pass on llvmpipe, where the CPU encoder is
+// faster and the process smaller (docs/performance.md "Which encoder"). The choice by
+// renderer kind, and the kind from real GL_RENDERER strings.
+TEST(FrameJob, EncoderChoiceByRendererKind) {
+  using shading::RendererKind;
+  EXPECT_EQ(shading::renderer_kind("llvmpipe (LLVM 15.0.6, 256 bits)"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("softpipe"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("Mesa X11 / swrast"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("Google SwiftShader"), RendererKind::software);
+  EXPECT_EQ(shading::renderer_kind("NVIDIA H200/PCIe/SSE2"), RendererKind::hardware);
+  EXPECT_EQ(shading::renderer_kind("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.6, DRM 3.54)"),
+            RendererKind::hardware);
+  EXPECT_EQ(shading::renderer_kind("Mesa Intel(R) UHD Graphics 620 (KBL GT2)"), RendererKind::hardware);
+  const struct {
+    const char* setting;
+    RendererKind kind;
+    bool exr;
+    EncoderChoice want;
+  } cases[] = {
+      {"auto", RendererKind::software, false, EncoderChoice::cpu},
+      {"auto", RendererKind::hardware, false, EncoderChoice::gpu},
+      {"auto", RendererKind::hardware, true, EncoderChoice::cpu},
+      {"auto", RendererKind::software, true, EncoderChoice::cpu},
+      {"gpu", RendererKind::software, false, EncoderChoice::gpu},
+      {"gpu", RendererKind::hardware, false, EncoderChoice::gpu},
+      {"cpu", RendererKind::hardware, false, EncoderChoice::cpu},
+      {"cpu", RendererKind::software, false, EncoderChoice::cpu},
+  };
+  for (const auto& c : cases)
+    EXPECT_EQ(choose_encoder(c.setting, c.kind, c.exr), c.want)
+        << c.setting << " " << shading::to_string(c.kind) << (c.exr ? " exr" : "");
+}
+
+// Issue 29 item 11: glTF emission has a unit, gltf_emissive_nits, a setting like any other
+// (before, 1 cd/m2 fixed in the loader: emissive models looked unlit under the 100 lux rig).
+// Its default is a white diffuser's luminance under 100 lux, E / pi (the light-based
+// exposure's paper white), and the loader's own default is the same number.
+TEST(FrameJob, GltfEmissiveNitsIsASettingReachingTheLoader) {
+  const Setting* s = find_setting("gltf_emissive_nits");
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->default_value().get<double>(), 100 / M_PI, 1e-12);
+  EXPECT_EQ(s->default_value().get<double>(), shading::kGltfEmissiveNits);
+  EXPECT_EQ(shading::SceneLoadOptions{}.gltf_emissive_nits, shading::kGltfEmissiveNits);
+  for (double nits : {1.0, 203.0}) {
+    auto r = parse_request_json({{"scene", "material-grid"}, {"gltf_emissive_nits", nits}}, cli_context(Source::render));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(render_request(*r, {}).load.gltf_emissive_nits, nits);
+  }
+  auto d = parse_request_json({{"scene", "material-grid"}}, cli_context(Source::render));
+  ASSERT_TRUE(d.ok());
+  EXPECT_EQ(render_request(*d, {}).load.gltf_emissive_nits, shading::kGltfEmissiveNits);
 }
 
 TEST(FrameJob, OutputsAreCheckedAgainstTheResolvedMode) {

@@ -2,7 +2,10 @@
 // setting; every default valid under its own rules; docs/settings.md generated from it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
+#include <regex>
 #include <set>
 #include <sstream>
 
@@ -120,6 +123,78 @@ TEST(Settings, DocsTableIsGeneratedFromTheTable) {
   const std::string table = settings_markdown();
   EXPECT_NE(doc.find(table), std::string::npos)
       << "docs/settings.md is out of date: regenerate its table with `hdrd settings --markdown`";
+}
+
+// Issue 29 item 11: docs/scene-format.md named `gltf_emissive_nits` as if it were a setting;
+// it was not one. Every backticked name in docs/*.md that looks like a setting — a
+// snake_case name ending in a unit (settings' names carry units: STYLE.md), or a dotted name
+// under a setting group (`display.peak_nits`) — is a setting (its path, alias or last
+// component, or a child of a map setting such as `tone.params.w`), or another name the
+// program really reads or writes: a string literal in its sources (sidecar, scene and
+// config keys), or one of the few C++ members the docs describe, listed here and checked to
+// exist. docs/settings.md is the table itself.
+TEST(Settings, EveryNameTheDocsGiveASettingIsOne) {
+  namespace fs = std::filesystem;
+  const fs::path root = hdrd::testing::source_dir();
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  std::set<std::string> names, heads, components, maps;
+  for (const auto& st : settings()) {
+    names.insert(std::string(st.path));
+    if (!st.alias.empty()) names.insert(std::string(st.alias));
+    const auto dot = st.path.rfind('.');
+    components.insert(std::string(st.path.substr(dot == std::string_view::npos ? 0 : dot + 1)));
+    if (st.path.find('.') != std::string_view::npos) heads.insert(std::string(st.path.substr(0, st.path.find('.'))));
+    if (st.type == Type::number_map) maps.insert(std::string(st.path) + ".");
+  }
+  // String literals of the program's own sources (and its benchmarks'): the names it reads and writes.
+  std::set<std::string> literals;
+  const std::regex literal(R"re("([A-Za-z0-9_.]+)")re");
+  std::string sources;
+  for (const char* dir : {"bench", "daemon", "display", "encode", "job", "patterns", "shading", "tools", "clients"})
+    for (const auto& e : fs::recursive_directory_iterator(root / dir)) {
+      const auto ext = e.path().extension();
+      if (ext != ".cpp" && ext != ".hpp" && ext != ".py") continue;
+      const std::string text = slurp(e.path());
+      sources += text;
+      for (std::sregex_iterator m(text.begin(), text.end(), literal), end; m != end; ++m) literals.insert((*m)[1]);
+    }
+  // C++ members the docs describe by name (RenderResult, RenderRequest, the encode API).
+  const std::set<std::string> cpp_members = {"cut_times_s", "previous_time_s", "exposure_compensation_ev",
+                                             "display_nits", "reference_display_nits", "scene_cut_threshold_stops"};
+  for (const auto& m : cpp_members)
+    EXPECT_NE(sources.find(m), std::string::npos) << m << " is no longer in the sources";
+  const std::regex ticked("`([a-z][a-z0-9_]*(?:\\.[a-z0-9_]+)*)`");
+  const char* units[] = {"_nits", "_ev", "_s", "_lux", "_deg", "_percent", "_fraction", "_stops", "_px"};
+  int checked = 0;
+  for (const auto& e : fs::directory_iterator(root / "docs")) {
+    if (e.path().extension() != ".md" || e.path().filename() == "settings.md") continue;
+    const std::string doc = slurp(e.path());
+    for (std::sregex_iterator m(doc.begin(), doc.end(), ticked), end; m != end; ++m) {
+      const std::string name = (*m)[1];
+      const bool dotted = name.find('.') != std::string::npos;
+      const bool under_group = dotted && heads.count(name.substr(0, name.find('.')));
+      const bool has_unit = std::any_of(std::begin(units), std::end(units), [&](const char* u) { return name.ends_with(u); });
+      if (!has_unit && !under_group) continue;
+      ++checked;
+      if (names.count(name)) continue;
+      if (std::any_of(maps.begin(), maps.end(), [&](const auto& p) { return name.rfind(p, 0) == 0; })) continue;
+      if (under_group) {
+        // error codes share the groups' names (`video.size`, `gainmap.mode`): no unit, no setting
+        if (!has_unit) continue;
+        ADD_FAILURE() << e.path().filename().string() << " names `" << name << "`, which is not a setting";
+        continue;
+      }
+      if (components.count(name) || literals.count(name) || cpp_members.count(name)) continue;
+      ADD_FAILURE() << e.path().filename().string() << " names `" << name
+                    << "`, which is not a setting (nor anything else the program reads or writes)";
+    }
+  }
+  EXPECT_GT(checked, 50);
 }
 
 }  // namespace

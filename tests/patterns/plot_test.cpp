@@ -77,6 +77,55 @@ TEST(CurvesPlot, PngDecodesWithAxesAndColouredLines) {
   EXPECT_GT(black, 2000);     // frame, ticks, text
 }
 
+// Issue 29 item 6: a dashed series drawn from many short segments (a curve's 300 points)
+// was solid in the PNG, the dash restarting at every segment. Along a dashed horizontal line
+// the raster must be on about half the time, in runs about the dash length long.
+TEST(CurvesPlot, RasterDashesRunAcrossShortSegments) {
+  Plot p;
+  p.width = 400, p.height = 200;
+  p.x_min = 0, p.x_max = 1, p.y_min = 0, p.y_max = 1;
+  Series s{"dashed", {214, 39, 40}, {}, 8};
+  for (int k = 0; k <= 300; ++k) s.points.push_back({k / 300.0, 0.5});  // ~1 px per segment
+  p.series.push_back(s);
+  const Canvas8 c = render_raster(p);
+  // The row the line is on: the one with the most of its colour.
+  int best_row = 0, best = -1;
+  for (int y = 0; y < c.height; ++y) {
+    int n = 0;
+    for (int x = 100; x < 300; ++x) n += c.get(x, y) == s.colour;
+    if (n > best) best = n, best_row = y;
+  }
+  int on = 0, runs = 0;
+  bool prev = false;
+  for (int x = 100; x < 300; ++x) {
+    const bool cur = c.get(x, best_row) == s.colour;
+    on += cur;
+    runs += cur && !prev;
+    prev = cur;
+  }
+  EXPECT_GT(on, 200 * 0.35) << "the line is missing";
+  EXPECT_LT(on, 200 * 0.65) << "the dashed line is drawn solid";
+  EXPECT_GE(runs, 200 / 16 - 2);  // one dash per 16 px
+}
+
+// No two curves of the plot share a line style, so none can be mistaken for another (before,
+// aces-ocio-sdr-video had pq-shoulder's colour, its dashes lost in the PNG).
+TEST(CurvesPlot, EveryCurveHasItsOwnStyle) {
+  const Plot p = tone_curves_plot(1000);
+  ASSERT_EQ(p.series.size(), tonemap::curves().size());
+  for (std::size_t i = 0; i < p.series.size(); ++i)
+    for (std::size_t j = i + 1; j < p.series.size(); ++j)
+      EXPECT_FALSE(p.series[i].colour == p.series[j].colour && p.series[i].dash == p.series[j].dash)
+          << p.series[i].name << " and " << p.series[j].name;
+  // The styles are as distinct as the palette allows: 3 x kPlotColours before a repeat.
+  const std::size_t styles = 3 * static_cast<std::size_t>(kPlotColours);
+  for (std::size_t i = 0; i < styles; ++i)
+    for (std::size_t j = i + 1; j < styles; ++j) {
+      const auto a = series_style(i), b = series_style(j);
+      EXPECT_FALSE(a.colour == b.colour && a.dash == b.dash) << i << " " << j;
+    }
+}
+
 // Fresnel equations against published values: glass n = 1.5 reflects 4 % at normal
 // incidence and 5.0 % (Rs 9.2 %, Rp 0.85 %) at 45 degrees; every conductor reaches 1 at grazing.
 TEST(Fresnel, ConductorEquationsMatchPublishedValues) {
@@ -93,7 +142,7 @@ TEST(Fresnel, PlotHasSchlickForEveryTable92MetalAndExactWhereKnown) {
   const Plot p = fresnel_plot();
   int exact = 0, schlick = 0;
   for (const auto& s : p.series) {
-    (s.dashed ? exact : schlick)++;
+    (s.dash > 0 ? exact : schlick)++;
     EXPECT_NEAR(s.points.back()[1], 1.0, 1e-3) << s.name;  // F(90 degrees) = 1
     for (std::size_t i = 1; i < s.points.size(); ++i) EXPECT_GE(s.points[i][1], s.points[i - 1][1] - 0.02) << s.name;
   }

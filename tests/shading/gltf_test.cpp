@@ -64,7 +64,8 @@ TEST(Gltf, TextureEncodingDecodesSrgb136To0_2462) {
   HDRD_REQUIRE_FIXTURE(path, "fixtures/gltf/TextureEncodingTest/TextureEncodingTest.glb");
   HDRD_REQUIRE_RENDERER(renderer);
   // Emission row: material 4 has emissiveFactor 0.24620132670783548, materials 5-7 an
-  // emissive texture of 136/255 in three PNG flavours; decoded as sRGB they must agree.
+  // emissive texture of 136/255 in three PNG flavours; decoded as sRGB they must agree
+  // (times kGltfEmissiveNits, the luminance of an emissive 1.0).
   auto scene = load_gltf_file(path);
   ASSERT_TRUE(scene.ok()) << scene.error().message;
   std::vector<Vec3> centres;  // where the file puts the emissive spheres
@@ -91,7 +92,7 @@ TEST(Gltf, TextureEncodingDecodesSrgb136To0_2462) {
   for (const Vec3& c : centres) {
     const auto [px, py] = project(r->camera, q.width, q.height, c);
     const float* p = r->scene_nits.px(px, py);
-    EXPECT_NEAR(p[1], 0.2462013267, 1e-4) << "sphere at x = " << c.x;
+    EXPECT_NEAR(p[1] / kGltfEmissiveNits, 0.2462013267, 1e-4) << "sphere at x = " << c.x;
     EXPECT_NEAR(p[0], 0.0, 1e-6);
     EXPECT_NEAR(p[2], 0.0, 1e-6);
   }
@@ -113,14 +114,15 @@ TEST(Gltf, EmissiveStrengthScalesEmission1To16) {
   q.samples = 1;
   auto r = renderer.render(q);
   ASSERT_TRUE(r.ok()) << r.error().message;
-  // Cube1..Cube16 at x = -6, -3, 0, 3, 6 (file nodes); emissiveFactor (0.1, 0.5, 0.9) x strength.
+  // Cube1..Cube16 at x = -6, -3, 0, 3, 6 (file nodes); emissiveFactor (0.1, 0.5, 0.9) x strength
+  // x kGltfEmissiveNits.
   const double strength[] = {1, 2, 4, 8, 16};
   for (int i = 0; i < 5; ++i) {
     const auto [px, py] = project(r->camera, q.width, q.height, {-6.0 + 3 * i, 0, 0.5});
     const float* p = r->scene_nits.px(px, py);
-    EXPECT_NEAR(p[0], 0.1 * strength[i], 1e-5 * strength[i]) << "Cube" << strength[i];
-    EXPECT_NEAR(p[1], 0.5 * strength[i], 1e-5 * strength[i]);
-    EXPECT_NEAR(p[2], 0.9 * strength[i], 1e-5 * strength[i]);
+    EXPECT_NEAR(p[0] / kGltfEmissiveNits, 0.1 * strength[i], 1e-5 * strength[i]) << "Cube" << strength[i];
+    EXPECT_NEAR(p[1] / kGltfEmissiveNits, 0.5 * strength[i], 1e-5 * strength[i]);
+    EXPECT_NEAR(p[2] / kGltfEmissiveNits, 0.9 * strength[i], 1e-5 * strength[i]);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "tools/common/settings_cli.hpp"
 
 #include <algorithm>
+#include <cctype>
 
 #include <fmt/format.h>
 
@@ -11,24 +12,61 @@
 namespace hdrd::cli {
 namespace {
 
-std::string group_of(std::string_view path) {
+// --help's headings, by a path's first component. Every setting has one (a test checks),
+// so a new setting group is one line here, not a fallback heading.
+struct SettingGroup {
+  std::string_view head, title;
+};
+constexpr SettingGroup kSettingGroups[] = {
+    {"display", "Display"},       {"tone", "Tone mapping"},     {"gamut", "Tone mapping"},
+    {"exposure", "Exposure"},     {"ui", "UI overlay"},         {"grade", "Grading"},
+    {"scene", "Source"},          {"width", "Source"},          {"height", "Source"},
+    {"samples", "Source"},        {"camera", "Source"},         {"start_s", "Source"},
+    {"encoder", "Source"},        {"backend", "Source"},        {"input", "Source"},
+    {"environment", "Environment"}, {"energy_compensation", "Environment"},
+    {"gltf_emissive_nits", "Source"},
+    {"pattern", "Pattern"},       {"params", "Pattern"},
+    {"frames", "Sequence"},       {"fps", "Sequence"},          {"images", "Sequence"},
+    {"sequence", "Sequence"},     {"video", "Sequence"},        {"metadata", "Sequence"},
+    {"present", "Sequence"},
+    {"formats", "Output"},        {"quality", "Output"},        {"lossless", "Output"},
+    {"avif", "Output"},           {"jxl", "Output"},            {"jpeg", "Output"},
+    {"gainmap", "Output"},        {"png_level", "Output"},      {"durable", "Output"},
+    {"dither", "Output"},         {"dump", "Output"},           {"name", "Output"},
+    {"timeout_s", "Output"},      {"threads", "Output"},
+};
+
+
+// A "--no-x" flag sets a default-true boolean false: its help says what it turns off, in the
+// setting's own words ("Turn off params.labels (on by default): draw the cd/m2 labels"). A
+// short lead that scopes the doc ("Sequences: ", "Preetham sky: ") stays in front.
+std::string off_help(const job::Setting& s) {
+  std::string_view doc = s.doc;
+  std::string lead;
+  if (const auto colon = doc.find(": "); colon != std::string_view::npos && colon <= 24 &&
+                                         doc.substr(0, colon).find_first_of("(,;") == std::string_view::npos) {
+    lead = std::string(doc.substr(0, colon + 2));
+    doc.remove_prefix(colon + 2);
+  }
+  std::string what(doc);
+  // "Draw the labels" -> "draw the labels"; an acronym ("GGX ...") keeps its case.
+  if (what.size() > 1 && std::isupper(static_cast<unsigned char>(what[0])) &&
+      !std::isupper(static_cast<unsigned char>(what[1])))
+    what[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(what[0])));
+  return fmt::format("{}{} {} (on by default): {}", lead, lead.empty() ? "Turn off" : "turn off", s.path, what);
+}
+
+}  // namespace
+
+std::string_view setting_group(std::string_view path) {
   const std::string_view head = path.substr(0, path.find('.'));
-  if (head == "display") return "Display";
-  if (head == "tone" || head == "gamut") return "Tone mapping";
-  if (head == "exposure") return "Exposure";
-  if (head == "ui") return "UI overlay";
-  if (head == "grade") return "Grading";
-  if (head == "params" || head == "pattern") return "Pattern";
-  if (head == "frames" || head == "fps" || head == "start_s" || head == "images" || head == "video" ||
-      head == "metadata" || head == "sequence")
-    return "Sequence";
-  if (head == "scene" || head == "width" || head == "height" || head == "samples" || head == "camera" ||
-      head == "encoder" || head == "backend" || head == "input")
-    return "Source";
-  return "Output";
+  for (const auto& g : kSettingGroups)
+    if (g.head == head) return g.title;
+  return {};
 }
 
 std::string help_of(const job::Setting& s) {
+  if (s.flag.rfind("--no-", 0) == 0) return off_help(s);
   std::string h(s.doc);
   std::string extra;
   if (!s.unit.empty()) extra = std::string(s.unit);
@@ -39,11 +77,13 @@ std::string help_of(const job::Setting& s) {
     for (auto v : s.choices) c += (c.empty() ? "" : ", ") + std::string(v);
     extra += (extra.empty() ? "" : "; ") + c;
   }
-  if (s.flag.rfind("--no-", 0) != 0) extra += (extra.empty() ? "" : "; ") + std::string("default: ") + s.default_text();
-  if (!extra.empty()) h += " (" + extra + ")";
+  extra += (extra.empty() ? "" : "; ") + std::string("default: ") + s.default_text();
+  h += " (" + extra + ")";
   if (s.type == job::Type::number_map) h += "; repeatable";
   return h;
 }
+
+namespace {
 
 // What the option's value completes to (bash completion, cli_docs.hpp).
 ValueHint hint_of(const job::Setting& s) {
@@ -80,7 +120,7 @@ void add_setting_options(CLI::App& app, job::Source source, job::Reach reach, Se
       o->multi_option_policy(s.type == job::Type::number_map ? CLI::MultiOptionPolicy::TakeAll
                                                              : CLI::MultiOptionPolicy::TakeLast);
     }
-    o->group(group_of(s.path));
+    o->group(std::string(setting_group(s.path)));
     set_value_hint(o, hint_of(s));
   }
   for (const auto& c : job::composites()) {
@@ -96,7 +136,7 @@ void add_setting_options(CLI::App& app, job::Source source, job::Reach reach, Se
         ->type_name(std::string(c.metavar))
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast)
-        ->group(group_of(c.paths[0]));
+        ->group(std::string(setting_group(c.paths[0])));
   }
 }
 

@@ -27,6 +27,15 @@ struct SettingArgs {
 void add_setting_options(CLI::App& app, job::Source source, job::Reach reach, SettingArgs& args,
                          const std::vector<std::string>& skip = {});
 
+// The heading a setting is listed under in --help ("Display", "Environment", "Output", ...),
+// by its path's first component; empty for a path no group claims (a test keeps every
+// setting in one).
+std::string_view setting_group(std::string_view path);
+
+// A setting's --help line: its doc, unit, range or choices, default; a "--no-x" flag's says
+// what it turns off.
+std::string help_of(const job::Setting& s);
+
 // The request JSON the typed flags stand for (errors name the flag).
 Result<nlohmann::json> request_json(const SettingArgs& args);
 

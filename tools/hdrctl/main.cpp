@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/client.hpp"
+#include "encode/display_target.hpp"
 #include "tools/common/cli_docs.hpp"
 #include "tools/common/progress_bar.hpp"
 #include "tools/hdrctl/options.hpp"
@@ -349,6 +350,7 @@ struct JobsOptions {
   std::string action = "list";  // list, show, cancel, wait, result
   std::string id;
   std::string output;
+  bool keep = false;  // leave the job's files in the dump directory after downloading
 };
 
 json get_job(const Global& g, const std::string& id) {
@@ -400,8 +402,23 @@ void download_result(const Global& g, const std::string& id, const std::string& 
                  static_cast<unsigned long long>(file.bytes()));
 }
 
+// Once the result is downloaded, the job's files in the daemon's dump directory (the video,
+// the sidecar, the per-frame dumps) are a copy nobody asked to keep: DELETE removes them,
+// so downloads do not pile up there. --keep leaves them.
+void remove_job_files(const Global& g, const std::string& id) {
+  const json j = json::parse(call(g, "DELETE", "/v1/jobs/" + id).body, nullptr, false);
+  if (!g.quiet && j.value("files_removed", false))
+    std::fprintf(stderr, "hdrctl: removed job %s's files from the daemon's dump directory (--keep keeps them)\n",
+                 id.c_str());
+}
+
+void download_and_tidy(const Global& g, const std::string& id, const std::string& output, bool keep) {
+  download_result(g, id, output);
+  if (!keep) remove_job_files(g, id);
+}
+
 // A final job: its JSON (--json) or a summary; failed and cancelled jobs exit 1.
-void finish_job(const Global& g, const json& j, const std::string& output) {
+void finish_job(const Global& g, json j, const std::string& output, bool keep) {
   const std::string state = j.value("state", "");
   if (state != "done") {
     if (g.json) print(j.dump(2));
@@ -409,11 +426,15 @@ void finish_job(const Global& g, const json& j, const std::string& output) {
                                                 : std::string("no reason given");
     throw Failure{1, fmt::format("job {} {}: {}", j.value("id", ""), state, why)};
   }
-  if (!output.empty()) download_result(g, j.value("id", ""), output);
+  if (!output.empty()) {
+    download_and_tidy(g, j.value("id", ""), output, keep);
+    if (!keep) j = get_job(g, j.value("id", ""));  // files and files_removed as they are now
+  }
   if (g.json) return print(j.dump(2));
   std::string s = fmt::format("job {} done: {} frames in {:.1f} s ({:.1f} fps)\n", j.value("id", ""),
                               j.value("frames_done", 0), j.value("elapsed_s", 0.0), j.value("fps", 0.0));
   for (const auto& [kind, path] : j["files"].items()) s += fmt::format("  {:14} {}\n", kind, path.get<std::string>());
+  if (!output.empty()) s += fmt::format("  {:14} {}\n", "downloaded", output);
   print(s);
 }
 
@@ -427,7 +448,7 @@ void run_sequence(const Global& g, const SequenceOptions& o) {
   if (!g.quiet)
     std::fprintf(stderr, "hdrctl: job %s, %d frames (it goes on if hdrctl stops: hdrctl jobs cancel %s)\n", id.c_str(),
                  accepted.value("frames_total", 0), id.c_str());
-  finish_job(g, follow_job(g, id, o.poll_s), o.output);
+  finish_job(g, follow_job(g, id, o.poll_s), o.output, o.keep);
 }
 
 void run_jobs(const Global& g, const JobsOptions& o) {
@@ -448,10 +469,10 @@ void run_jobs(const Global& g, const JobsOptions& o) {
     const json j = json::parse(call(g, "DELETE", "/v1/jobs/" + o.id).body, nullptr, false);
     return print(g.json ? j.dump(2) : job_line(j));
   }
-  if (o.action == "wait") return finish_job(g, follow_job(g, o.id, 0.25), o.output);
+  if (o.action == "wait") return finish_job(g, follow_job(g, o.id, 0.25), o.output, o.keep);
   if (o.action == "result") {
     if (o.output.empty()) throw Failure{2, "hdrctl jobs result ID needs -o FILE"};
-    return download_result(g, o.id, o.output);
+    return download_and_tidy(g, o.id, o.output, o.keep);
   }
   throw Failure{2, "hdrctl jobs: unknown action '" + o.action + "' (list, show, cancel, wait, result)"};
 }
@@ -470,6 +491,13 @@ void add_global_options(CLI::App& app, Global& g) {
 constexpr const char* kGlobalNote =
     "\nhdrctl's own options (--socket, --tcp, --token-file, --timeout, --json, -q) may also be given here.\n"
     "While a request takes longer than a second, hdrctl shows \"waiting for the daemon... N s\" on stderr.";
+
+// The display modes, as every --mode names them (hdrd selftest's patterns::suite_modes_text).
+std::string selftest_mode_help() {
+  std::string s;
+  for (auto m : hdrd::mode_names()) s += (s.empty() ? "" : ", ") + std::string(m);
+  return "Display mode: " + s;
+}
 
 std::string examples(std::initializer_list<const char*> lines) {
   std::string s = "Examples:\n";
@@ -550,7 +578,7 @@ int main(int argc, char** argv) {
 
   SelftestOptions so;
   auto* selftest = app.add_subcommand("selftest", "POST /v1/selftest: the daemon's display-mode suite for one mode");
-  selftest->add_option("--mode", so.mode, "sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb or hlg")->capture_default_str();
+  selftest->add_option("--mode", so.mode, selftest_mode_help())->capture_default_str();
   selftest->add_option("--peak", so.peak, "Display peak luminance, cd/m2 (default: the mode's)");
   selftest->add_flag("--no-render", so.no_render, "Skip the rendered built-in scenes");
   selftest->add_flag("--failed", so.failed_only, "Print only failed checks (text output)");
@@ -580,7 +608,8 @@ int main(int argc, char** argv) {
   auto* jobs = app.add_subcommand("jobs", "GET/DELETE /v1/jobs: list, show, cancel, wait for or fetch sequence jobs");
   jobs->add_option("action", jo.action, "list (default), show ID, cancel ID, wait ID, result ID -o FILE");
   jobs->add_option("id", jo.id, "The job's id");
-  jobs->add_option("-o,--output", jo.output, "wait/result: download the result here");
+  jobs->add_option("-o,--output", jo.output, "wait/result: download the result here (then remove the job's files)");
+  jobs->add_flag("--keep", jo.keep, "With -o: keep the job's files in the daemon's dump directory after downloading");
   jobs->footer(examples({"hdrctl jobs", "hdrctl jobs show 3f2a9c0d1e4b5a67 --json", "hdrctl jobs cancel 3f2a9c0d1e4b5a67",
                          "hdrctl jobs wait 3f2a9c0d1e4b5a67 -o walk.mp4"}));
 

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <fmt/format.h>
+
 #include "job/outputs.hpp"
 
 namespace hdrctl {
@@ -30,6 +32,22 @@ std::string base64(const std::string& in) {
     out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
   }
   return out;
+}
+
+std::string format_help() {
+  std::string ext;
+  for (auto e : hdrd::job::output_extensions()) ext += (ext.empty() ? "" : " ") + std::string(e);
+  std::string dump;
+  for (auto n : hdrd::job::output_names()) dump += (dump.empty() ? "" : ",") + std::string(n);
+  return fmt::format("The answer's format: {}; default from -o's extension ({}), else png. With --dump: the dump's "
+                     "formats, a list of {}",
+                     hdrd::job::reply_output_names(), ext, dump);
+}
+
+std::string sequence_format_help() {
+  std::string names;
+  for (auto n : hdrd::job::output_names()) names += (names.empty() ? "" : ",") + std::string(n);
+  return "Per-frame dumps beside the video (OUTBASE.NNNNN.EXT), a list of " + names;
 }
 
 // --set a.b.c=VALUE: VALUE is JSON when it parses as JSON, else a string.
@@ -71,9 +89,7 @@ void add_frame_options(CLI::App* app, hdrd::job::Source source, FrameOptions& o)
   app->add_option("--request", out.request_file, "JSON request body to start from (file, or - for stdin)");
   app->add_option("--set", out.sets, "Any request field: key.path=JSON (repeatable)");
   app->add_option("-o,--output", out.output, "Write the frame here (its extension picks the format)");
-  app->add_option("--format", out.format,
-                  "The answer's format: png, exr or raw (DRM buffer), default from -o's extension, else png; "
-                  "with --dump: the dump's formats (png,exr,raw,...)");
+  app->add_option("--format", out.format, format_help());
   app->add_flag("--dump", out.dump, "Write the dump into the daemon's dump directory and print its sidecar");
   app->add_option("--name", out.name, "With --dump: base name of the files");
   if (source != hdrd::job::Source::pattern)
@@ -104,8 +120,11 @@ json frame_body(const FrameOptions& o, const json& extra) {
 void add_sequence_options(CLI::App* app, SequenceOptions& o) {
   app->add_option("--request", o.request_file, "JSON request body to start from (file, or - for stdin)");
   app->add_option("--set", o.sets, "Any request field: key.path=JSON (repeatable)");
-  app->add_option("-o,--output", o.output, "When the job is done, download its video (else its sidecar) here");
-  app->add_option("--format", o.formats, "Per-frame dumps beside the video: png,exr,raw,... (OUTBASE.NNNNN.EXT)");
+  app->add_option("-o,--output", o.output,
+                  "When the job is done, download its video (else its sidecar) here, then remove the job's files "
+                  "from the daemon's dump directory");
+  app->add_flag("--keep", o.keep, "With -o: keep the job's files in the daemon's dump directory after downloading");
+  app->add_option("--format", o.formats, sequence_format_help());
   app->add_option("--name", o.name, "Base name of the files in the daemon's dump directory (default: generated)");
   app->add_flag("--detach", o.detach, "Print the job's id and return (follow it with hdrctl jobs show ID)");
   app->add_option("--poll", o.poll_s, "Seconds between progress polls")->check(CLI::Range(0.02, 60.0));
@@ -130,20 +149,23 @@ std::string accept_for(const OutputOptions& o) {
   if (o.dump) return "application/json";
   std::string name = o.format;
   if (name.empty()) {
-    const std::string ext = fs::path(o.output).extension().string();
-    const auto* by_ext = ext.size() > 1 ? hdrd::job::find_output(ext.substr(1)) : nullptr;
-    if (ext == ".bin") return "application/octet-stream";
-    if (!by_ext || !by_ext->reply) return "image/png, image/x-exr;q=0.9";  // scrgb has no PNG form
-    name = ext.substr(1);
+    // No extension (-o frame, -o -): the daemon's default, PNG (scrgb has no PNG form: EXR).
+    const std::string ext = o.output == "-" ? "" : fs::path(o.output).extension().string();
+    if (ext.empty()) return "image/png, image/x-exr;q=0.9";
+    const auto* by_ext = hdrd::job::output_for_extension(ext);
+    if (!by_ext) {
+      std::string known;
+      for (auto e : hdrd::job::output_extensions()) known += (known.empty() ? "" : ", ") + std::string(e);
+      throw Failure{2, fmt::format("-o {}: no format is written as '{}' (known: {}); or name one with --format",
+                                   o.output, ext, known)};
+    }
+    return std::string(by_ext->content_type);
   }
   const auto* out = hdrd::job::find_output(name);
-  if (!out || !out->reply) {
-    std::string names;
-    for (const auto& x : hdrd::job::outputs())
-      if (x.reply) names += (names.empty() ? "" : ", ") + std::string(x.name);
-    throw Failure{2, "--format (or -o's extension) must be one of " + names + " without --dump"};
-  }
+  if (!out || !out->reply)
+    throw Failure{2, "--format (or -o's extension) must be one of " + hdrd::job::reply_output_names() + " without --dump"};
   return std::string(out->content_type);
 }
+
 
 }  // namespace hdrctl

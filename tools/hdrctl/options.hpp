@@ -49,6 +49,7 @@ struct SequenceOptions {
   std::string formats;      // per-frame dumps (png,exr,raw,...)
   std::optional<std::string> name;
   bool detach = false;
+  bool keep = false;        // with -o: leave the job's files in the dump directory after downloading
   double poll_s = 0.25;
 };
 

@@ -105,6 +105,17 @@ std::string sequence_summary(const job::SequenceResult& r, bool json) {
   return s;
 }
 
+// "render 80.1 ms, encode 3.2 ms, ...": the stages a sequence ran, per frame. A render
+// sequence renders, an EXR sequence reads; a stage it never ran is left out, not shown as 0.
+std::string per_frame_stages(const nlohmann::json& timings_ms, int frames) {
+  std::string s;
+  for (const char* stage : {"render", "read", "encode", "dumps", "video"}) {
+    if (!timings_ms.contains(stage) || !timings_ms[stage].is_number()) continue;
+    s += fmt::format("{}{} {:.1f} ms", s.empty() ? "" : ", ", stage, timings_ms[stage].get<double>() / std::max(1, frames));
+  }
+  return s.empty() ? "no stage timed" : s;
+}
+
 // hdrd render --frames N / hdrd encode 'shot.%04d.exr': the sequence job (job/sequence.hpp).
 void run_sequence(const FrameCommand& o, job::FrameRequest request) {
   video::quiet_codec_logs();
@@ -115,10 +126,7 @@ void run_sequence(const FrameCommand& o, job::FrameRequest request) {
   auto result = job::run_sequence(request, o.outbase, options);
   bar.finish();
   if (!result) throw HdrdError(result.error());
-  const auto& t = result->timings_ms;
-  auto ms = [&](const char* k) { return t.contains(k) ? t[k].get<double>() / std::max(1, result->frames) : 0.0; };
-  progress("per frame: render {:.1f} ms, encode {:.1f} ms, dumps {:.1f} ms, video {:.1f} ms", ms("render"), ms("encode"),
-           ms("dumps"), ms("video"));
+  progress("per frame: {}", per_frame_stages(result->timings_ms, result->frames));
   print_out(sequence_summary(*result, o.common.json));
 }
 

@@ -46,7 +46,7 @@ void run(const SelftestOptions& o) {
 void setup(CLI::App& root) {
   auto o = std::make_shared<SelftestOptions>();
   auto* app = root.add_subcommand("selftest", "Run the display-mode suite for one mode and report every check");
-  app->add_option("--mode", o->mode, "sdr-srgb (or sdr), sdr-bt1886, hdr10, scrgb or hlg")->capture_default_str();
+  app->add_option("--mode", o->mode, "Display mode: " + patterns::suite_modes_text())->capture_default_str();
   app->add_option("--peak", o->peak_nits, "Display peak luminance, cd/m2 (default: the mode's)");
   app->add_flag("--no-render", o->no_render, "Skip the rendered built-in scenes");
   app->add_flag("--failed", o->failed_only, "Print only failed checks (text output)");

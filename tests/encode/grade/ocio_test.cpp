@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <fstream>
 #include <random>
+
+#include <OpenColorIO/OpenColorIO.h>
 
 #include "encode/colour/color.hpp"
 #include "encode/grade/grade.hpp"
@@ -258,6 +261,56 @@ TEST(AcesCurves, RegisteredWithMeasuredValues) {
       EXPECT_LE(y, o.peak_nits * 1.0001) << o.curve_name;
       prev = y;
     }
+  }
+}
+
+// Issue 29 item 6: "fixed peak 100 cd/m2", yet on a 1000 cd/m2 display the curve gave
+// 104.88 cd/m2 at x = 100 and 108 at x = 1000. The reference: OCIO 2.1's built-in chain,
+// run here on its own, then the ODT's last step as ACES 1.0's
+// ODT.Academy.Rec709_100nits_dim.ctl writes it: XYZ -> Rec.709 linear, clamp_f3(linearCV,
+// 0., 1.), 1.0 = 100 cd/m2. (OCIO's built-in ends at XYZ before that clamp; the ODT's tone
+// scale rises on above 48 cd/m2 cinema white with slopeHigh 0.04, so the clamp matters.)
+TEST(AcesCurves, SdrVideoStopsAtItsPeakAsTheOdtClips) {
+  namespace OCIO = OCIO_NAMESPACE;
+  ocio::register_tone_curves();
+  auto group = OCIO::GroupTransform::Create();
+  const color::Mat3 to_xyz = color::rgb_to_xyz(color::kRec2020);
+  const double m[16] = {to_xyz.m[0][0], to_xyz.m[0][1], to_xyz.m[0][2], 0, to_xyz.m[1][0], to_xyz.m[1][1], to_xyz.m[1][2], 0,
+                        to_xyz.m[2][0], to_xyz.m[2][1], to_xyz.m[2][2], 0, 0, 0, 0, 1};
+  auto mt = OCIO::MatrixTransform::Create();
+  mt->setMatrix(m);
+  group->appendTransform(mt);
+  auto ap0 = OCIO::BuiltinTransform::Create();
+  ap0->setStyle("UTILITY - ACES-AP0_to_CIE-XYZ-D65_BFD");
+  ap0->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
+  group->appendTransform(ap0);
+  auto odt = OCIO::BuiltinTransform::Create();
+  odt->setStyle("ACES-OUTPUT - ACES2065-1_to_CIE-XYZ-D65 - SDR-VIDEO_1.0");
+  group->appendTransform(odt);
+  const auto cpu = OCIO::Config::CreateRaw()->getProcessor(group)->getDefaultCPUProcessor();
+  const color::Mat3 xyz_to_709 = color::xyz_to_rgb(color::kRec709);
+  const color::Mat3 r709_to_2020 = color::rgb_to_rgb(color::kRec709, color::kRec2020);
+  auto reference_nits = [&](color::Vec3 rgb2020) {
+    float px[3] = {float(rgb2020.x), float(rgb2020.y), float(rgb2020.z)};
+    cpu->applyRGB(px);
+    const color::Vec3 lin = xyz_to_709 * color::Vec3{px[0], px[1], px[2]};
+    const auto clamp01 = [](double v) { return std::clamp(v, 0.0, 1.0); };
+    return r709_to_2020 * color::Vec3{clamp01(lin.x), clamp01(lin.y), clamp01(lin.z)} * 100.0;
+  };
+  auto c = tonemap::prepare("aces-ocio-sdr-video", {1000, 0.005, 203});
+  ASSERT_TRUE(c.ok());
+  for (double x : {0.18, 1.0, 4.0, 16.0, 100.0, 1000.0, 10000.0}) {
+    const double want = reference_nits({x, x, x}).y;
+    EXPECT_NEAR((*c)->map(x) * 203, want, 1e-3 * want + 1e-3) << x;
+    EXPECT_LE((*c)->map(x) * 203, 100.0 + 1e-6) << x;
+  }
+  EXPECT_NEAR((*c)->map(100.0) * 203, 100.0, 0.01);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(0.0, 50.0);
+  for (int i = 0; i < 200; ++i) {
+    const color::Vec3 rgb{u(rng), u(rng), u(rng)};
+    const color::Vec3 want = reference_nits(rgb), got = (*c)->map_rgb(rgb, tonemap::Apply::rgb) * 203.0;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], 2e-3 * std::abs(want[k]) + 2e-3) << i << " ch " << k;
   }
 }
 
