@@ -159,6 +159,7 @@ void ConnectionTable::idle(Key c, Clock::time_point now) {
     it->second.phase = Phase::header;
     it->second.since = now;
     it->second.started = false;
+    it->second.served = true;
   }
 }
 
@@ -182,7 +183,11 @@ void ConnectionTable::close_entry(Entry& e, Notice notice, Clock::time_point now
   switch (notice) {
     case Notice::none: break;
     case Notice::evicted:
-      // Told even when idle: its client may be writing a request right now.
+      // A kept-alive connection after a reply is closed silently: clients expect that and
+      // retry on a new one (RFC 9112 §9.3.1; daemon::Client and hdrd_client.py do), where
+      // a 503 read as the answer to their next request would not be retried. Any other is
+      // told why: its client may be writing its first request right now.
+      if (e.served && !e.started) break;
       err = make_error("server.busy", fmt::format("the connection was closed to make room for newer ones (at most {} "
                                                   "connections, {} per client); retry", limits_.max_connections,
                                                   limits_.max_connections_per_peer));
@@ -198,7 +203,7 @@ void ConnectionTable::close_entry(Entry& e, Notice notice, Clock::time_point now
       break;
   }
   if (err) send_raw_error(e.fd, *err, notice == Notice::evicted ? 1 : 0);
-  if (notice == Notice::evicted) {
+  if (notice == Notice::evicted && err) {
     ::shutdown(e.fd, SHUT_WR);
     e.half_closed = true;
     e.since = now;

@@ -17,11 +17,12 @@
 //   2. Then the oldest connection that is only waiting for a request header makes room,
 //      unless its socket holds unread bytes: a connection whose request has arrived but
 //      MHD has not read it yet (a busy machine) carries a request and is never closed for
-//      room. The one closed is answered 503 server.busy (Retry-After) and half-closed:
-//      a client that writes its request just then (a fresh connection, a keep-alive one
-//      being reused) still sends it and reads the 503, not a broken pipe; its read side
-//      is shut kClosedForRoomReadS later. MHD reading such a request is told to drop it
-//      (closed_by_us).
+//      room. A kept-alive connection idle after a reply is closed silently, as servers
+//      close those (clients retry on a new connection, RFC 9112 §9.3.1); any other one
+//      closed is answered 503 server.busy (Retry-After) and half-closed: a client that
+//      writes its first request just then still sends it and reads the 503, not a broken
+//      pipe; its read side is shut kClosedForRoomReadS later. MHD reading such a request
+//      is told to drop it (closed_by_us).
 //   3. Else the new connection is refused: its request is answered 503 server.busy with
 //      Retry-After (HttpServer), and it does not count.
 // The header deadline likewise spares a connection with unread bytes: then the server is
@@ -101,6 +102,7 @@ class ConnectionTable {
     Phase phase = Phase::header;
     Clock::time_point since;
     bool started = false;      // the request line arrived
+    bool served = false;       // a reply went out on it: an idle one is a kept-alive connection
     bool closing = false;      // shut down by us; MHD will report it closed
     bool half_closed = false;  // closed for room: the read side stays open a while (since = then)
     bool refused = false;
