@@ -164,6 +164,7 @@ Config parse_config(std::string_view text, const std::string& source) {
   Section paths(root, "paths", source);
   paths.read("asset_root", c.paths.asset_root);
   paths.read("dump_dir", c.paths.dump_dir);
+  paths.read("allow_hard_links", c.paths.allow_hard_links);
   paths.finish();
 
   Section limits(root, "limits", source);
@@ -317,7 +318,9 @@ nlohmann::json config_json(const Config& c) {
        {{"slurm_scripts_dir", c.cluster.slurm_scripts_dir.string()}, {"slurm_bin_dir", c.cluster.slurm_bin_dir.string()},
         {"slurm_conf", c.cluster.slurm_conf.string()}, {"hdrd_program", c.cluster.hdrd_program},
         {"sbatch_options", c.cluster.sbatch_options}, {"command_timeout_ms", c.cluster.command_timeout_ms}}},
-      {"paths", {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()}}},
+      {"paths",
+       {{"asset_root", c.paths.asset_root.string()}, {"dump_dir", c.paths.dump_dir.string()},
+        {"allow_hard_links", c.paths.allow_hard_links}}},
       {"limits",
        {{"max_width", l.max_width}, {"max_height", l.max_height}, {"max_pixels", l.max_pixels},
         {"max_samples", l.max_samples}, {"max_lights", l.max_lights}, {"max_body_bytes", l.max_body_bytes},

@@ -31,9 +31,11 @@ namespace fs = std::filesystem;
 
 bool names_a_sequence(const fs::path& spec) { return io::names_a_file_sequence(spec); }
 
-Result<std::vector<fs::path>> exr_sequence_files(const fs::path& spec) {
+Result<std::vector<fs::path>> exr_sequence_files(const fs::path& spec, const io::InputFiles& files) {
   if (spec.empty()) return make_error("input.sequence", "a sequence of EXR frames is needed (a pattern, a directory or a list file)", "images");
-  return io::file_sequence(spec);
+  io::FileSequenceRules rules;
+  rules.files = files;
+  return io::file_sequence(spec, rules);
 }
 
 bool sets_sequence_settings(const nlohmann::json& request) {
@@ -497,22 +499,22 @@ struct FrameSource {
   std::vector<fs::path> inputs;  // encode
 };
 
-Result<FrameSource> frame_source(const FrameRequest& request) {
+Result<FrameSource> frame_source(const FrameRequest& request, const io::InputFiles& files = {}) {
   if (!request.sequence) return make_error("internal", "run_sequence needs a request parsed as a sequence");
   if (request.source == Source::pattern) return make_error("request.value", "patterns have no sequence form", "frames");
   FrameSource src;
   src.fps = request.number("fps");
   src.total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
   if (request.source == Source::encode) {
-    auto files = exr_sequence_files(request.text("images"));
-    if (!files) return files.error();
-    if (!request.is_null("frames") && src.total > static_cast<int>(files->size()))
+    auto found = exr_sequence_files(request.text("images"), files);
+    if (!found) return found.error();
+    if (!request.is_null("frames") && src.total > static_cast<int>(found->size()))
       return make_error("request.value",
-                        fmt::format("frames: {} asked, {} has {}", src.total, request.text("images"), files->size()),
+                        fmt::format("frames: {} asked, {} has {}", src.total, request.text("images"), found->size()),
                         "frames");
-    if (request.is_null("frames")) src.total = static_cast<int>(files->size());
-    files->resize(static_cast<std::size_t>(src.total));
-    src.inputs = std::move(*files);
+    if (request.is_null("frames")) src.total = static_cast<int>(found->size());
+    found->resize(static_cast<std::size_t>(src.total));
+    src.inputs = std::move(*found);
   } else {
     src.start_s = request.number("start_s");
     src.total_from_scene = request.is_null("frames");
@@ -637,7 +639,7 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
 }  // namespace
 
 Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options) {
-  auto src = frame_source(request);
+  auto src = frame_source(request, options.files);
   if (!src) return src.error();
   const temporal::TemporalSettings ts = temporal_settings(request);
   if (auto ok = temporal::validate(ts); !ok) return ok.error();
@@ -671,7 +673,7 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
                                      shading::Renderer* renderer, std::vector<temporal::FrameDecision>* decided) {
   if (!decided && (outbase.empty() || !outbase.has_filename()))
     return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
-  auto src = frame_source(request);
+  auto src = frame_source(request, options.job.files);
   if (!src) return src.error();
   auto video = video_settings(request);
   if (!video) return video.error();

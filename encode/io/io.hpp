@@ -17,6 +17,7 @@
 #include "encode/colour/color.hpp"
 #include "encode/frame.hpp"
 #include "encode/image.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::io {
@@ -57,8 +58,13 @@ struct ExrReadOptions {
   // float conversion, half the memory; files with any float or uint channel still give `image`.
   bool half_pixels = false;
 };
-Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {});
+// `files`: where the path is opened (encode/io/beneath.hpp): beneath a root (the daemon) or
+// as given (the CLI); either way a FIFO or other non-regular file is refused, never waited on.
+Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {},
+                          const InputFiles& files = {});
 Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options = {});
+// ... naming the bytes `name` in messages (a file already read through InputFiles).
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options, const std::string& name);
 // The pixels the largest part of an EXR declares (its data window), from the header alone:
 // what decoding it would allocate, known before anything is decoded.
 Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes);
@@ -110,7 +116,7 @@ struct PngInfo {
   std::vector<std::uint16_t> samples;             // decoded samples (8-bit widened), row-major, channels interleaved
   int channels = 0;
 };
-Result<PngInfo> read_png_info(const std::filesystem::path& path);
+Result<PngInfo> read_png_info(const std::filesystem::path& path, const InputFiles& files = {});
 Result<PngInfo> read_png_info_memory(std::span<const std::uint8_t> bytes);
 
 // What a PNG declares in its IHDR chunk (PNG spec §11.2.2), read without decoding anything:
@@ -133,7 +139,7 @@ struct PngLimits {
 // sRGB-encoded, straight alpha unless `premultiplied` is declared. png.size when the PNG
 // declares more than `limits`.
 Result<OverlayImage> read_overlay_png(const std::filesystem::path& path, bool premultiplied = false,
-                                      const PngLimits& limits = {});
+                                      const PngLimits& limits = {}, const InputFiles& files = {});
 Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied = false,
                                              const PngLimits& limits = {});
 // Decoded bytes an overlay of w x h holds at most while it is read (the float image and
