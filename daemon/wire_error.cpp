@@ -37,6 +37,7 @@ constexpr StatusEntry kStatus[] = {
     {"job.not_ready", 409},
     {"job.conflict", 409},
     {"job.gone", 410},
+    {"job.file_changed", 410},        // its result or sidecar was replaced (a link, another file)
     {"path.not_found", 404},
     {"queue.full", 503},
     {"queue.memory", 503},            // the in-flight memory budget is taken; retry later
