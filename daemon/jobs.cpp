@@ -173,7 +173,8 @@ Result<JobInfo> JobRegistry::submit(SequenceSpec spec) {
   do job->id = new_job_id();
   while (jobs_.count(job->id));
   job->spec = std::move(spec);
-  if (same_name) {  // its files are about to be overwritten: they are the new job's now
+  if (same_name) {  // the same owner: the new job supersedes it, and every file it wrote goes now
+    remove_sequence_files(same_name->files, same_name->progress.frames_done);
     same_name->superseded_by = job->id;
     same_name->files.clear();
     same_name->identities.clear();

@@ -38,6 +38,7 @@ constexpr StatusEntry kStatus[] = {
     {"job.conflict", 409},
     {"job.gone", 410},
     {"job.file_changed", 410},        // its result or sidecar was replaced (a link, another file)
+    {"name.collision", 422},          // a name whose files could be another name's (job/outputs.hpp)
     {"path.not_found", 404},
     {"queue.full", 503},
     {"queue.memory", 503},            // the in-flight memory budget is taken; retry later

@@ -245,7 +245,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
   nlohmann::json files = nlohmann::json::object();
   const std::string stem = outbase.filename().string();
   for (const auto& kind : sum.frame_kinds) {
-    const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+    const std::string ext = kind == "sidecar" ? std::string(kSidecarSuffix) : std::string(find_output(kind)->suffix);
     files["frames"][kind] = fmt::format("{}.%05d{}", stem, ext);
     out.files["frames." + kind] = fmt::format("{}.%05d{}", outbase.string(), ext);
   }
@@ -258,8 +258,8 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
     out.files[kind] = paths.back().string();
   };
   if (metadata.has_dynamic_metadata()) {
-    add("hdr10plus", ".hdr10plus.json", metadata.hdr10plus_json().dump(2) + "\n");
-    add("dovi", ".dovi.json", metadata.dovi_json().dump(2) + "\n");
+    add("hdr10plus", std::string(kHdr10PlusSuffix), metadata.hdr10plus_json().dump(2) + "\n");
+    add("dovi", std::string(kDoviSuffix), metadata.dovi_json().dump(2) + "\n");
   }
   nlohmann::json timings = sum.timings;
   if (video) {
@@ -273,7 +273,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
     files["video"] = video->path.filename().string();
     out.files["video"] = video->path.string();
   }
-  const fs::path sidecar = outbase.string() + ".json";
+  const fs::path sidecar = outbase.string() + std::string(kSidecarSuffix);
   files["sidecar"] = sidecar.filename().string();
   j["files"] = files;
   j["timings_ms"] = timings;
@@ -906,7 +906,7 @@ Result<SequenceResult> merge_sequence_shards(const FrameRequest& request, const 
       sum.frames.push_back(frames[k]);
       const int index = next_frame + static_cast<int>(k);
       for (const auto& kind : sum.frame_kinds) {
-        const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+        const std::string ext = kind == "sidecar" ? std::string(kSidecarSuffix) : std::string(find_output(kind)->suffix);
         const fs::path from = shard_stats[i].parent_path() / "frames" / fmt::format("frame.{:05d}{}", index, ext);
         if (!fs::exists(from)) return make_error("sequence.shard", fmt::format("{}: {} is missing", shard, from.string()));
         moves.emplace_back(from, fs::path(frame_base(outbase, index) + ext));
