@@ -328,6 +328,10 @@ class SequenceSink {
       : request_(r), outbase_(outbase), options_(options), video_settings_(std::move(video)), total_(total) {}
   ~SequenceSink() {
     if (!finished_) remove_written();
+    if (!staging_.empty()) {
+      std::error_code ec;
+      fs::remove_all(staging_, ec);
+    }
   }
 
   Result<void> consume(FrameItem item) {
@@ -343,6 +347,11 @@ class SequenceSink {
       }
     }
     if (!item.result.files.empty()) {
+      if (!options_.shard && staging_.empty()) {  // the per-frame files wait there until the end
+        auto staging = io::make_staging_dir(outbase_);
+        if (!staging) return staging.error();
+        staging_ = std::move(*staging);
+      }
       auto written = write_outputs(item.result, frame_base(dumps_base(), item.index));
       if (!written) return written.error();
       const bool first = sum_.frames.empty();
@@ -397,6 +406,7 @@ class SequenceSink {
     if (!metadata_) return make_error("internal", "a sequence finished without frames");
     if (options_.shard) return finish_shard();
     metadata_->finish();
+    if (auto ok = commit_staged_frames(); !ok) return ok.error();
     std::optional<video::VideoResult> video;
     if (writer_) {
       const auto t0 = Clock::now();
@@ -409,6 +419,11 @@ class SequenceSink {
     auto out = write_sequence_outputs(request_, outbase_, fps, sum_, *metadata_, video);
     if (!out) return out.error();
     finished_ = true;
+    if (!staging_.empty()) {  // the commit: the journal goes, every file is final
+      std::error_code ec;
+      fs::remove_all(staging_, ec);
+      staging_.clear();
+    }
     return out;
   }
 
@@ -455,8 +470,33 @@ class SequenceSink {
     return out;
   }
 
-  // Where a shard puts what the merge will move: the work dir.
-  fs::path dumps_base() const { return options_.shard ? options_.shard->work_dir / "frames" / "frame" : outbase_; }
+  // The sequence is done: the journal names every final file it will have (so that a start-up
+  // sweep after a crash from here on removes them: io::sweep_staging), then the per-frame
+  // files move from the staging directory to their final names.
+  Result<void> commit_staged_frames() {
+    if (staging_.empty()) return {};
+    const fs::path dir = outbase_.parent_path();
+    const std::string stem = outbase_.filename().string();
+    std::vector<std::pair<fs::path, fs::path>> moves;
+    std::vector<std::string> journal;
+    for (auto& p : written_) {
+      const fs::path from = p, to = dir / from.filename();
+      moves.emplace_back(from, to);
+      journal.push_back(to.filename().string());
+      p = to.string();  // from here on, cleaning up removes the final name (a rename not made leaves a staged file)
+    }
+    for (const auto& suffix : owned_suffixes())
+      if (suffix.find(kFrameNumber) == std::string::npos) journal.push_back(stem + suffix);
+    for (const auto container : {video::Container::mp4, video::Container::mkv})
+      journal.push_back(stem + std::string(video::file_extension(container)));
+    return io::commit_staged(staging_, journal, moves);
+  }
+
+  // Where a shard puts what the merge will move: the work dir; a sequence's per-frame files
+  // wait in its staging directory until it is done.
+  fs::path dumps_base() const {
+    return options_.shard ? options_.shard->work_dir / "frames" / "frame" : staging_ / outbase_.filename();
+  }
   fs::path video_base() const {
     return options_.shard ? options_.shard->work_dir / fmt::format("shard-{}", options_.shard->shard) : outbase_;
   }
@@ -479,6 +519,7 @@ class SequenceSink {
   SequenceSummary sum_;
   nlohmann::json lights_ = nlohmann::json::array();
   std::vector<std::string> written_;
+  fs::path staging_;  // DIR/.NAME.staging-XXXXXXXXXXXX while per-frame files are written
   int scene_ = -1;
   bool finished_ = false;
 };

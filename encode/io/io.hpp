@@ -180,6 +180,23 @@ Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame);
 // hex digits) and rename or remove; one left behind belongs to a writer that was killed.
 bool is_atomic_write_temporary(std::string_view filename);
 
+// A sequence's staging directory, so that its files appear under their final names only
+// when it is done (job/sequence.cpp): the per-frame files are written into
+// DIR/.STEM.staging-<12 hex digits>/ and, at the end, the journal there names every final
+// file the sequence will have before the first is renamed into DIR; the directory is
+// removed last. One found at start (sweep_staging) belongs to a sequence that was killed:
+// its files and every final-named file its journal names are removed.
+Result<std::filesystem::path> make_staging_dir(const std::filesystem::path& outbase);
+bool is_staging_dir_name(std::string_view filename);
+// Writes the journal (bare file names in the staging directory's parent), then renames each
+// `moves` pair (staged path, final path). On a failure the renamed ones are where `moves`
+// says: the caller removes them.
+Result<void> commit_staged(const std::filesystem::path& staging, const std::vector<std::string>& journal,
+                           const std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& moves);
+// Removes every staging directory in `dir` and the files their journals name; returns how
+// many files it removed.
+std::size_t sweep_staging(const std::filesystem::path& dir);
+
 enum class DumpFormat { png, exr, raw };
 std::optional<DumpFormat> parse_dump_format(std::string_view s);
 // The formats that apply to a mode by default: all but png for scrgb.
