@@ -58,20 +58,30 @@ std::string_view video_content_type(const std::string& path) {
   return "video/mp4";
 }
 
-// A finished job's file as the reply body, streamed from its descriptor.
-Result<Reply> file_reply(const std::string& path, std::string content_type) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return make_error("job.gone", fmt::format("{} is no longer in the dump directory", std::filesystem::path(path).filename().string()));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    return make_error("io.read", "cannot read " + std::filesystem::path(path).filename().string());
-  }
+// A finished job's file as the reply body, streamed from its descriptor: opened in the dump
+// directory without following a link, and only while it is the file the job wrote (its
+// device, inode and size as recorded when the job finished); anything else is 410.
+Result<Reply> file_reply(const JobInfo& info, const std::string& kind, std::string content_type) {
+  const auto path = info.files.count(kind) ? std::filesystem::path(info.files.at(kind)) : std::filesystem::path();
+  const std::string name = path.filename().string();
+  const auto recorded = info.identities.find(kind);
+  if (path.empty() || recorded == info.identities.end())
+    return make_error("job.gone", fmt::format("job {} has no {} file", info.id, kind));
+  auto dir = io::Root::open(path.parent_path(), {.allow_hard_links = true, .what = "the dump directory"});
+  auto fd = dir ? io::open_beneath(**dir, name) : Result<io::UniqueFd>(dir.error());
+  if (!fd && fd.error().code == "path.not_found")
+    return make_error("job.gone", fmt::format("{} is no longer in the dump directory", name));
+  if (!fd)
+    return make_error("job.file_changed", fmt::format("{} is not the file job {} wrote: {}", name, info.id, fd.error().message));
+  auto now = io::identity_of(fd->get(), name);
+  if (!now) return now.error();
+  if (!(*now == recorded->second))
+    return make_error("job.file_changed",
+                      fmt::format("{} is not the file job {} wrote (replaced since: another device, inode or size)", name, info.id));
   Reply r;
   r.content_type = std::move(content_type);
-  r.file = std::make_shared<const FileBody>(fd, static_cast<std::uint64_t>(st.st_size));
-  r.headers.emplace_back("Content-Disposition",
-                         fmt::format("attachment; filename=\"{}\"", std::filesystem::path(path).filename().string()));
+  r.file = std::make_shared<const FileBody>(fd->release(), static_cast<std::uint64_t>(now->size));
+  r.headers.emplace_back("Content-Disposition", fmt::format("attachment; filename=\"{}\"", name));
   return r;
 }
 
@@ -169,8 +179,8 @@ void Service::get_job(HttpRequest& http, std::shared_ptr<Responder> responder) {
         "job.gone", info->files_removed ? fmt::format("job {}'s files were deleted", info->id)
                                         : fmt::format("job {}'s files were overwritten by job {}", info->id, info->superseded_by))));
   const bool video = part == "result" && info->files.count("video");
-  const std::string path = video ? info->files.at("video") : info->files.count("sidecar") ? info->files.at("sidecar") : "";
-  auto r = file_reply(path, video ? std::string(video_content_type(path)) : "application/json");
+  auto r = video ? file_reply(*info, "video", std::string(video_content_type(info->files.at("video"))))
+                 : file_reply(*info, "sidecar", "application/json");
   responder->reply(r ? std::move(*r) : Reply::error(r.error()));
 }
 

@@ -81,6 +81,12 @@ job::JobOptions daemon_job_options(const Config& cfg) {
   // reach further files (their paths are not checked against the root).
   jo.scene_files = false;
   jo.scene_base_dir = cfg.paths.asset_root.empty() ? std::filesystem::path("/nonexistent") : cfg.paths.asset_root;
+  // The job holds the asset root as a directory handle and opens every file beneath it when
+  // it reads it; without one (none configured, or gone) every file is refused.
+  jo.files.as_given = false;
+  if (!cfg.paths.asset_root.empty())
+    if (auto root = io::Root::open(cfg.paths.asset_root, {.allow_hard_links = cfg.paths.allow_hard_links}); root)
+      jo.files.root = *root;
   jo.max_lights = cfg.limits.max_lights;
   return jo;
 }

@@ -129,6 +129,7 @@ std::span<const ConfigKey> config_keys() {
       {"cluster", "command_timeout_ms", [](Config& c) -> ConfigField { return &c.cluster.command_timeout_ms; }},
       {"paths", "asset_root", [](Config& c) -> ConfigField { return &c.paths.asset_root; }},
       {"paths", "dump_dir", [](Config& c) -> ConfigField { return &c.paths.dump_dir; }},
+      {"paths", "allow_hard_links", [](Config& c) -> ConfigField { return &c.paths.allow_hard_links; }},
       {"limits", "max_width", [](Config& c) -> ConfigField { return &c.limits.max_width; }},
       {"limits", "max_height", [](Config& c) -> ConfigField { return &c.limits.max_height; }},
       {"limits", "max_pixels", [](Config& c) -> ConfigField { return &c.limits.max_pixels; }},

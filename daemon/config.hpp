@@ -75,6 +75,7 @@ struct ClusterConfig {
 struct PathsConfig {
   std::filesystem::path asset_root;        // requests may name files only inside it
   std::filesystem::path dump_dir;          // "dump": true writes here, nowhere else
+  bool allow_hard_links = false;           // a file in the asset root with st_nlink > 1 may be read
 };
 
 struct LogConfig {

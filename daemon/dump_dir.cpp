@@ -29,8 +29,11 @@ DumpDirectory::DumpDirectory(fs::path dir) : dir_(std::move(dir)) {
     if (!io::is_atomic_write_temporary(name) || !entry.is_regular_file(ec)) continue;
     if (fs::remove(entry.path(), ec)) ++removed_;
   }
+  // A sequence killed before it was done: its staging directory, and whatever its journal
+  // says it had renamed into place already.
+  removed_ += io::sweep_staging(dir_);
   if (removed_ > 0)
-    spdlog::info("dump directory {}: removed {} stale temporary file(s) left by an interrupted dump", dir_.string(),
+    spdlog::info("dump directory {}: removed {} stale temporary or staged file(s) left by an interrupted dump", dir_.string(),
                  removed_);
 }
 

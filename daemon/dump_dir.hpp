@@ -1,6 +1,7 @@
 // The dump directory while the daemon uses it. An flock(2) on the directory itself says
 // that no other hdrd writes there, so every temporary of an atomic write found at start
-// belongs to a writer that died mid-dump (kill -9, power loss) and is removed; a
+// belongs to a writer that died mid-dump (kill -9, power loss) and is removed (and so is a
+// sequence's staging directory with the files its journal names, io::sweep_staging); a
 // directory another running daemon holds is left alone (its temporaries may be live).
 #pragma once
 

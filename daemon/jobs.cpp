@@ -1,5 +1,6 @@
 #include "daemon/jobs.hpp"
 
+#include <fcntl.h>
 #include <malloc.h>
 
 #include <algorithm>
@@ -37,6 +38,7 @@ struct JobRegistry::Job {
   job::SequenceProgress progress;
   std::optional<Error> error;
   std::map<std::string, std::string> files;
+  std::map<std::string, io::FileIdentity> identities;
   SystemClock::time_point created = SystemClock::now();
   std::optional<SystemClock::time_point> started, finished;
   std::optional<Clock::time_point> deadline;
@@ -60,6 +62,19 @@ std::string new_job_id() {
 std::string iso8601(SystemClock::time_point t) {
   const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(t.time_since_epoch()).count() % 1000;
   return fmt::format("{:%Y-%m-%dT%H:%M:%S}.{:03d}Z", fmt::gmtime(SystemClock::to_time_t(t)), ms);
+}
+
+// What each file a finished job wrote is (device, inode, size), taken without following a
+// link as soon as run_sequence has renamed it into place.
+std::map<std::string, io::FileIdentity> identities_of(const std::map<std::string, std::string>& files) {
+  std::map<std::string, io::FileIdentity> out;
+  for (const auto& [kind, path] : files) {
+    if (kind.rfind("frames.", 0) == 0) continue;  // patterns, not files
+    io::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC));
+    if (!fd) continue;  // not served: GET answers 410
+    if (auto id = io::identity_of(fd.get(), path); id) out.emplace(kind, *id);
+  }
+  return out;
 }
 
 }  // namespace
@@ -124,6 +139,7 @@ JobInfo JobRegistry::info_of(const Job& job) {
   i.eta_s = job.state == JobState::running ? job.progress.eta_s : 0;
   i.error = job.error;
   i.files = job.files;
+  i.identities = job.identities;
   i.created = job.created;
   i.started = job.started;
   i.finished = job.finished;
@@ -157,9 +173,11 @@ Result<JobInfo> JobRegistry::submit(SequenceSpec spec) {
   do job->id = new_job_id();
   while (jobs_.count(job->id));
   job->spec = std::move(spec);
-  if (same_name) {  // its files are about to be overwritten: they are the new job's now
+  if (same_name) {  // the same owner: the new job supersedes it, and every file it wrote goes now
+    remove_sequence_files(same_name->files, same_name->progress.frames_done);
     same_name->superseded_by = job->id;
     same_name->files.clear();
+    same_name->identities.clear();
   }
   memory_in_flight_ += job->spec.memory_bytes;
   jobs_.emplace(job->id, job);
@@ -294,9 +312,11 @@ void JobRegistry::run(const std::shared_ptr<Job>& self, std::unique_ptr<shading:
   if (renderer) renderer->release_frame_targets();
   ::malloc_trim(0);  // a sequence's frames were large and many: hand the free memory back
   if (result) {
+    auto identities = identities_of(result->files);
     {
       std::lock_guard lock(mu_);
       job.files = result->files;
+      job.identities = std::move(identities);
       job.progress.frames_done = result->frames;
     }
     return finish(self, JobState::done, std::nullopt);

@@ -26,6 +26,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 #include "job/request.hpp"
 #include "job/sequence.hpp"
@@ -55,6 +56,9 @@ struct JobInfo {
   double fps = 0, eta_s = 0;
   std::optional<Error> error;                  // failed (and cancelled: why)
   std::map<std::string, std::string> files;    // done: kind -> path (job/sequence.hpp SequenceResult::files)
+  // done: kind -> the file the job wrote (device, inode, size), for every file but the
+  // per-frame patterns: GET .../result and .../sidecar serve only that file (else 410).
+  std::map<std::string, io::FileIdentity> identities;
   std::chrono::system_clock::time_point created;
   std::optional<std::chrono::system_clock::time_point> started, finished;
   std::uint64_t memory_bytes = 0;

@@ -56,14 +56,13 @@ Result<std::uint64_t> ui_bytes(const job::FrameRequest& r, const Limits& limits)
   if (upload) {
     head.assign(r.ui_png.begin(), r.ui_png.begin() + std::ptrdiff_t(std::min<std::size_t>(r.ui_png.size(), 64)));
   } else {
+    // Its header only, before the 202; never waiting on a FIFO (the job reads the file
+    // itself beneath the asset root, encode/io/beneath.hpp).
     const std::filesystem::path path = r.text("ui.path");
-    std::ifstream f(path, std::ios::binary);
-    head.resize(64);
-    f.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
-    head.resize(std::size_t(std::max<std::streamsize>(f.gcount(), 0)));
-    std::error_code ec;
-    file_bytes = std::filesystem::file_size(path, ec);
-    if (ec) file_bytes = 0;
+    if (auto fd = io::open_regular(path); fd) {
+      if (auto bytes = io::read_prefix(fd->get(), path.string(), 64); bytes) head.assign(bytes->begin(), bytes->end());
+      if (auto id = io::identity_of(fd->get(), path.string()); id) file_bytes = std::uint64_t(id->size);
+    }
   }
   const auto h = io::png_header(head);
   if (!h) return make_error("png.not_png", fmt::format("{}: not a PNG file", field), field);
@@ -125,13 +124,13 @@ Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const
                                                std::size_t queue_depth, std::size_t body_bytes, const Limits& limits) {
   std::uint64_t frame = 0, pixels = 0;
   if (r.source == job::Source::encode) {
-    std::error_code ec;
-    const std::uint64_t size = std::filesystem::file_size(first_exr, ec);
-    if (ec) return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
-    std::vector<std::uint8_t> head(std::min<std::uint64_t>(size, kExrHeaderPrefixBytes));
-    std::ifstream in(first_exr, std::ios::binary);
-    if (!in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size())))
-      return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
+    // The header only, before the 202; never waiting on a FIFO.
+    auto fd = io::open_regular(first_exr);
+    auto id = fd ? io::identity_of(fd->get(), first_exr.string()) : Result<io::FileIdentity>(fd.error());
+    auto prefix = id ? io::read_prefix(fd->get(), first_exr.string(), kExrHeaderPrefixBytes) : Result<std::string>(id.error());
+    if (!prefix) return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
+    const std::uint64_t size = std::uint64_t(id->size);
+    const std::vector<std::uint8_t> head(prefix->begin(), prefix->end());
     auto e = estimate_encode_memory(r, std::nullopt, head, limits);
     if (!e) return e.error();
     auto px = io::exr_declared_pixels(head);

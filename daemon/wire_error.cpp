@@ -26,12 +26,19 @@ constexpr StatusEntry kStatus[] = {
     {"request.length_required", 411},  // chunked request bodies: a body must declare its length
     {"request.cancelled", 499},
     {"path.forbidden", 403},
+    // The file model (encode/io/beneath.hpp): a file opened when it is read, beneath the asset
+    // root, is a symbolic link, has more than one hard link, or is a FIFO, device, directory.
+    {"path.symlink", 403},
+    {"path.hard_link", 403},
+    {"path.not_regular", 422},
     // Sequence jobs (jobs.hpp): an unknown id, a result asked before it exists, a name a
     // running job writes, files deleted or overwritten since.
     {"job.not_found", 404},
     {"job.not_ready", 409},
     {"job.conflict", 409},
     {"job.gone", 410},
+    {"job.file_changed", 410},        // its result or sidecar was replaced (a link, another file)
+    {"name.collision", 422},          // a name whose files could be another name's (job/outputs.hpp)
     {"path.not_found", 404},
     {"queue.full", 503},
     {"queue.memory", 503},            // the in-flight memory budget is taken; retry later

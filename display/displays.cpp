@@ -132,12 +132,12 @@ Result<std::optional<Profile>> connector_profile(const std::string& name, const 
 }  // namespace
 
 Result<std::optional<Profile>> select_profile(const std::string& display, const std::string& edid_path,
-                                              const std::string& override_file) {
+                                              const std::string& override_file, const io::InputFiles& files) {
   auto overrides = load_default_overrides();
   if (!overrides) return overrides.error();
   std::optional<Profile> p;
   if (!edid_path.empty()) {
-    auto fromfile = profile_from_edid_file(edid_path);
+    auto fromfile = profile_from_edid_file(edid_path, files);
     if (!fromfile) return fromfile.error();
     auto applied = apply_matching_overrides(std::move(*fromfile), *overrides);
     if (!applied) return applied.error();
@@ -153,7 +153,7 @@ Result<std::optional<Profile>> select_profile(const std::string& display, const 
     p = std::move(*c);
   }
   if (!override_file.empty()) {
-    auto o = load_profile_override(override_file);
+    auto o = load_profile_override(override_file, files);
     if (!o) return o.error();
     auto applied = apply_override(p ? std::move(*p) : Profile{}, *o);
     if (!applied) return applied.error();

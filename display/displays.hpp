@@ -64,8 +64,9 @@ nlohmann::json to_json(const DisplaysReport& r);
 // applied, then `override_file` (named by the user, so applied without [match]).
 // --display auto on a headless machine is nullopt, not an error: the caller keeps its
 // defaults and should say so.
+// `files`: where edid_path and override_file are opened (encode/io/beneath.hpp).
 Result<std::optional<Profile>> select_profile(const std::string& display, const std::string& edid_path,
-                                              const std::string& override_file = "");
+                                              const std::string& override_file = "", const io::InputFiles& files = {});
 
 // Loads every override in default_profile_dirs(); unreadable files are errors.
 Result<std::vector<ProfileOverride>> load_default_overrides();

@@ -255,21 +255,15 @@ Result<Profile> profile_from_edid(std::span<const std::uint8_t> edid) {
   return profile_from_edid_info(*info);
 }
 
-Result<std::vector<std::uint8_t>> read_binary_file(const std::filesystem::path& path, std::size_t max_bytes) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return make_error("file.open", fmt::format("cannot open {}", path.string()), "path");
-  std::vector<std::uint8_t> bytes;
-  char buf[4096];
-  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
-    bytes.insert(bytes.end(), buf, buf + f.gcount());
-    if (bytes.size() > max_bytes)
-      return make_error("file.too_large", fmt::format("{} is larger than {} bytes", path.string(), max_bytes), "path");
-  }
-  return bytes;
+Result<std::vector<std::uint8_t>> read_binary_file(const std::filesystem::path& path, std::size_t max_bytes,
+                                                   const io::InputFiles& files) {
+  auto bytes = files.read(path, max_bytes);
+  if (!bytes) return io::reader_error(bytes.error(), "file.open", "file.open", "path");
+  return std::vector<std::uint8_t>(bytes->begin(), bytes->end());
 }
 
-Result<Profile> profile_from_edid_file(const std::filesystem::path& path) {
-  auto bytes = read_binary_file(path);
+Result<Profile> profile_from_edid_file(const std::filesystem::path& path, const io::InputFiles& files) {
+  auto bytes = read_binary_file(path, 64 * 1024, files);
   if (!bytes) return bytes.error();
   auto info = parse_edid(*bytes);
   if (!info) {

@@ -16,6 +16,7 @@
 #include "display/edid.hpp"
 #include "encode/colour/color.hpp"
 #include "encode/display_target.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::display {
@@ -54,11 +55,12 @@ struct Profile {
 // Profile of a parsed EDID. Never fails: missing or absurd values fall back (see notes).
 Profile profile_from_edid_info(const EdidInfo& info);
 Result<Profile> profile_from_edid(std::span<const std::uint8_t> edid);
-Result<Profile> profile_from_edid_file(const std::filesystem::path& path);
+Result<Profile> profile_from_edid_file(const std::filesystem::path& path, const io::InputFiles& files = {});
 
-// Reads a whole (small) binary file, e.g. an EDID; errors name the path.
+// Reads a whole (small) binary file, e.g. an EDID, opened through `files` (encode/io/beneath.hpp:
+// beneath the daemon's asset root, or as given; never waiting on a FIFO); errors name the path.
 Result<std::vector<std::uint8_t>> read_binary_file(const std::filesystem::path& path,
-                                                   std::size_t max_bytes = 64 * 1024);
+                                                   std::size_t max_bytes = 64 * 1024, const io::InputFiles& files = {});
 
 // What the profile says about the levels (peak, black, the display's primaries) for the
 // levels resolver (encode/display_target.hpp resolve_target), which adds the mode's
@@ -98,7 +100,7 @@ struct ProfileOverride {
 Result<ProfileOverride> parse_profile_override(const nlohmann::json& j, const std::string& source);
 Result<ProfileOverride> parse_profile_override_toml(std::string_view text, const std::string& source);
 // By extension: .toml or .json.
-Result<ProfileOverride> load_profile_override(const std::filesystem::path& path);
+Result<ProfileOverride> load_profile_override(const std::filesystem::path& path, const io::InputFiles& files = {});
 // Every *.toml / *.json in `dir`, in name order; a missing directory is an empty list.
 Result<std::vector<ProfileOverride>> load_profile_overrides(const std::filesystem::path& dir);
 

@@ -150,8 +150,8 @@ Result<ProfileOverride> parse_profile_override_toml(std::string_view text, const
   }
 }
 
-Result<ProfileOverride> load_profile_override(const std::filesystem::path& path) {
-  auto bytes = read_binary_file(path, 1 << 20);
+Result<ProfileOverride> load_profile_override(const std::filesystem::path& path, const io::InputFiles& files) {
+  auto bytes = read_binary_file(path, 1 << 20, files);
   if (!bytes) return bytes.error();
   const std::string text(bytes->begin(), bytes->end());
   const std::string ext = path.extension().string();

@@ -13,12 +13,13 @@
 
 namespace hdrd::job {
 
-Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::string>* warnings) {
+Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::string>* warnings,
+                                      const io::InputFiles& files) {
   const std::string connector = r.text("display.connector"), edid = r.text("display.edid"),
                     profile_file = r.text("display.profile");
   std::optional<display::Profile> profile;
   if (!connector.empty() || !edid.empty() || !profile_file.empty()) {
-    auto p = display::select_profile(connector, edid, profile_file);
+    auto p = display::select_profile(connector, edid, profile_file, files);
     if (!p) {
       Error e = p.error();
       if (e.field.empty() || e.field == "path") e.field = !edid.empty() ? "display.edid" : !profile_file.empty() ? "display.profile" : "display.connector";
@@ -87,7 +88,7 @@ Result<void> check_pattern_mode(const FrameRequest& r, const DisplayTarget& targ
 namespace {
 
 Result<std::shared_ptr<const grade::Grade>> load_grade(const FrameRequest& r, const DisplayTarget& target,
-                                                       std::vector<std::string>* warnings) {
+                                                       std::vector<std::string>* warnings, const io::InputFiles& files) {
   if (r.is_null("grade.lut") && r.is_null("grade.ocio_look") && r.is_null("grade.ocio_display"))
     return std::shared_ptr<const grade::Grade>();
   grade::GradeSettings gs;
@@ -97,6 +98,7 @@ Result<std::shared_ptr<const grade::Grade>> load_grade(const FrameRequest& r, co
   gs.ocio_look = r.text("grade.ocio_look");
   gs.ocio_display = r.text("grade.ocio_display");
   gs.ocio_view = r.text("grade.ocio_view");
+  gs.files = files;
   if (const std::string shaper = r.text("grade.shaper"); !shaper.empty()) {
     // "log2", or with its range: "log2:-8:8", "sqrt:16" (checked when parsed).
     const auto spec = lut::parse_shaper_spec(shaper);
@@ -114,11 +116,11 @@ Result<std::shared_ptr<const grade::Grade>> load_grade(const FrameRequest& r, co
   return *g;
 }
 
-Result<UiSettings> load_ui(const FrameRequest& r) {
+Result<UiSettings> load_ui(const FrameRequest& r, const io::InputFiles& files) {
   UiSettings ui;
   if (r.is_null("ui.path") && r.ui_png.empty()) return ui;
   const bool premultiplied = r.boolean("ui.premultiplied");
-  auto overlay = r.ui_png.empty() ? io::read_overlay_png(r.text("ui.path"), premultiplied)
+  auto overlay = r.ui_png.empty() ? io::read_overlay_png(r.text("ui.path"), premultiplied, {}, files)
                                   : io::read_overlay_png_memory(r.ui_png, premultiplied);
   if (!overlay) {
     Error e = overlay.error();
@@ -145,7 +147,8 @@ exposure::Mode exposure_mode(const FrameRequest& r, bool illuminance_known) {
 }
 
 Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarget& target, int threads,
-                                       std::vector<std::string>* warnings, LoadedResources* resources) {
+                                       std::vector<std::string>* warnings, LoadedResources* resources,
+                                       const io::InputFiles& files) {
   EncodeSettings s;
   s.target = target;
   s.threads = threads;
@@ -175,11 +178,11 @@ Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarge
     if (warnings) warnings->insert(warnings->end(), resources->warnings.begin(), resources->warnings.end());
     return s;
   }
-  auto ui = load_ui(r);
+  auto ui = load_ui(r, files);
   if (!ui) return ui.error();
   s.ui = std::move(*ui);
   std::vector<std::string> grade_warnings;
-  auto g = load_grade(r, target, &grade_warnings);
+  auto g = load_grade(r, target, &grade_warnings, files);
   if (!g) return g.error();
   s.grade = std::move(*g);
   if (warnings) warnings->insert(warnings->end(), grade_warnings.begin(), grade_warnings.end());
@@ -215,6 +218,7 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
   if (sky || !env_file.empty()) {
     shading::EnvironmentSpec env;
     env.file = env_file;
+    env.files = options.files;
     if (sky) {
       shading::SkyParams p;
       p.sun_elevation_deg = r.optional_number("environment.sky.sun_elevation_deg").value_or(p.sun_elevation_deg);
@@ -234,6 +238,7 @@ shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& o
   rq.previous_time_s = options.previous_time_s;
   rq.load.base_dir = options.scene_base_dir;
   rq.load.allow_files = options.scene_files;
+  rq.load.files = options.files;
   rq.load.limits.max_lights = options.max_lights;
   return rq;
 }

@@ -18,7 +18,9 @@ namespace hdrd::job {
 // request names (display.connector / display.edid, then display.profile) and the request's
 // own levels. A connector that is not attached (headless) keeps the mode's defaults, with a
 // warning. Errors from reading an EDID keep their code (edid.*: 422 in the daemon).
-Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::string>* warnings);
+// `files`: where display.edid and display.profile are opened (JobOptions::files).
+Result<DisplayTarget> resolve_display(const FrameRequest& r, std::vector<std::string>* warnings,
+                                      const io::InputFiles& files = {});
 
 // bt2111 exists for hdr10 and hlg: checked once the display has decided the mode.
 Result<void> check_pattern_mode(const FrameRequest& r, const DisplayTarget& target);
@@ -26,9 +28,11 @@ Result<void> check_pattern_mode(const FrameRequest& r, const DisplayTarget& targ
 // Tone curve, exposure settings, gamut, dither, the grade (loaded) and the UI overlay
 // (decoded, its declared size checked first). The exposure mode is decided by
 // exposure_mode() once the source is known.
-// `resources` (a sequence's): loaded on the first call, reused after.
+// `resources` (a sequence's): loaded on the first call, reused after. `files`: where the
+// LUT, the OpenColorIO config and ui.path are opened (JobOptions::files).
 Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarget& target, int threads,
-                                       std::vector<std::string>* warnings, LoadedResources* resources = nullptr);
+                                       std::vector<std::string>* warnings, LoadedResources* resources = nullptr,
+                                       const io::InputFiles& files = {});
 
 // The exposure rule (exposure.mode "auto", RTR4 §8.2.2: meter the light, not the pixels):
 // camera when ev100 is given; light-based when the illuminance is known (a render's

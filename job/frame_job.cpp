@@ -144,7 +144,8 @@ Result<void> check_outputs(const std::vector<Output>& outputs, Source source, Mo
 
 // The encoder settings of the request, keeping what the asked-for outputs need.
 Result<EncodeSettings> job_settings(FrameJob::State& st) {
-  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings, st.options.resources.get());
+  auto settings = encode_settings(st.request, st.target, st.options.threads, &st.warnings, st.options.resources.get(),
+                                  st.options.files);
   if (!settings) return settings.error();
   settings->keep_display_nits = st.wants(&OutputInfo::needs_display_nits);
   settings->png_samples = st.wants(&OutputInfo::needs_signal16);
@@ -182,7 +183,7 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
                                   request.scene.name.substr(0, 64), names),
                       "scene");
   }
-  auto target = resolve_display(request, &s->warnings);
+  auto target = resolve_display(request, &s->warnings, options.files);
   if (!target) return target.error();
   s->target = *target;
   if (!outputs) {
@@ -343,7 +344,7 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   // Half files decode straight to half pixels, which the encoder reads as they are.
   const io::ExrReadOptions read{.half_pixels = true};
   const std::span upload(reinterpret_cast<const std::uint8_t*>(st.input.bytes.data()), st.input.bytes.size());
-  auto exr = upload.empty() ? io::read_exr(st.input.path, read) : io::read_exr_memory(upload, read);
+  auto exr = upload.empty() ? io::read_exr(st.input.path, read, st.options.files) : io::read_exr_memory(upload, read);
   if (!exr) return exr.error();
   st.timings["read"] = ms_since(t0);
   // An upload's bytes are not needed once decoded: freed before the encoder's buffers.

@@ -21,6 +21,7 @@
 
 #include "encode/frame.hpp"
 #include "encode/image.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/pipeline.hpp"
 #include "encode/result.hpp"
 #include "job/outputs.hpp"
@@ -55,6 +56,11 @@ struct JobOptions {
   // scene to the file it was named by (the daemon: requests name files only in the root).
   std::filesystem::path scene_base_dir = ".";
   bool scene_files = true;
+  // Where every file the request names is opened, at the moment it is read (frames, LUTs,
+  // EDIDs, maps, UI PNGs, scenes; encode/io/beneath.hpp): the daemon's asset root, held by
+  // the job as a directory handle; none (the CLI): as given. The resolved paths in the
+  // request are only names within it: nothing is read by path unchecked.
+  io::InputFiles files;
   int max_lights = 256;
   std::function<bool()> should_stop;        // cancellation (the daemon's deadline, a disconnect)
   // Sequences (job/sequence.cpp): the scene time of a render, and the per-frame decisions

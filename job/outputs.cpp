@@ -134,4 +134,42 @@ Result<std::vector<Output>> outputs_from_names(const std::vector<std::string>& n
   return out;
 }
 
+std::vector<std::string> owned_suffixes() {
+  std::vector<std::string> out = {std::string(kSidecarSuffix), std::string(kHdr10PlusSuffix), std::string(kDoviSuffix)};
+  std::vector<std::string> per_frame = {std::string(kSidecarSuffix)};
+  for (const auto& o : kOutputs) per_frame.emplace_back(o.suffix);
+  for (const auto& s : per_frame) {
+    if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
+    out.push_back(std::string(kFrameNumber) + s);
+  }
+  return out;
+}
+
+namespace {
+
+// How many characters of `name`'s end match `ending`, where kFrameNumber in it stands for a
+// dot and five digits; 0 when they do not.
+std::size_t ends_with_pattern(std::string_view name, std::string_view ending) {
+  std::string want;
+  for (std::size_t i = 0; i < ending.size();)
+    if (ending.substr(i, kFrameNumber.size()) == kFrameNumber) want += ".#####", i += kFrameNumber.size();
+    else want += ending[i++];
+  if (name.size() < want.size()) return 0;
+  const std::string_view tail = name.substr(name.size() - want.size());
+  for (std::size_t i = 0; i < want.size(); ++i)
+    if (want[i] == '#' ? !std::isdigit(static_cast<unsigned char>(tail[i])) : tail[i] != want[i]) return 0;
+  return want.size();
+}
+
+}  // namespace
+
+std::optional<std::string> colliding_name_ending(std::string_view name) {
+  for (const auto& suffix : owned_suffixes())
+    for (std::size_t dot = suffix.find('.', 1); dot != std::string::npos; dot = suffix.find('.', dot + 1)) {
+      const std::string ending = suffix.substr(0, dot);  // what NAME + it + the rest would share
+      if (const std::size_t n = ends_with_pattern(name, ending); n > 0) return std::string(name.substr(name.size() - n));
+    }
+  return std::nullopt;
+}
+
 }  // namespace hdrd::job

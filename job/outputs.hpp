@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -55,5 +56,25 @@ std::vector<Output> default_outputs(Source source, Mode mode);
 // `formats` as outputs; errors name the setting when one does not apply to the mode or source.
 Result<std::vector<Output>> outputs_from_names(const std::vector<std::string>& names, Source source, Mode mode,
                                                std::string_view field_label = "formats");
+
+// ---- the files a name owns --------------------------------------------------------------
+// Every file a job named NAME writes is NAME + a suffix (docs/dump-format.md): an output's
+// (above), the sidecar's, a sequence's metadata files and its video, and per-frame files
+// NAME.%05d + an output's or the sidecar's suffix. Two names own disjoint files unless one
+// is the other plus what a suffix holds before one of its dots: "clash.00001" writes
+// clash.00001.json, frame 1's sidecar of "clash"; "a.scene" writes a.scene.exr, the
+// scene-exr of "a". Such names are refused (colliding_name_ending); a name used again is
+// the same owner (the daemon's later job supersedes the earlier one and removes its files).
+inline constexpr std::string_view kSidecarSuffix = ".json";
+inline constexpr std::string_view kHdr10PlusSuffix = ".hdr10plus.json";
+inline constexpr std::string_view kDoviSuffix = ".dovi.json";
+inline constexpr std::string_view kFrameNumber = ".%05d";  // printf: a frame's number, 5 digits
+// Every suffix but the video's (encode/video/writer.hpp file_extension: no dot within it);
+// per-frame ones spelled with kFrameNumber.
+std::vector<std::string> owned_suffixes();
+// The ending of `name` that could make its files another name's (".00001", ".hdr10plus",
+// ".dovi", ".scene", ".heatmap", ...: each suffix's part before one of its inner dots,
+// kFrameNumber standing for five digits), or nullopt when there is none.
+std::optional<std::string> colliding_name_ending(std::string_view name);
 
 }  // namespace hdrd::job

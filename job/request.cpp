@@ -15,6 +15,7 @@
 #include "encode/grade/lut.hpp"
 #include "encode/io/digest.hpp"
 #include "encode/tone/tonemap.hpp"
+#include "job/outputs.hpp"
 #include "job/pattern_params.hpp"
 
 namespace hdrd::job {
@@ -416,6 +417,13 @@ class Rules {
                       });
       if (!ok)
         fail("request.value", "name: 1-100 characters of A-Z a-z 0-9 . _ -, not starting with '.'", "name");
+      // Per file, not per name: a name may not end in what makes its files another's.
+      if (const auto ending = colliding_name_ending(n))
+        fail("name.collision",
+             fmt::format("name: '{}' ends in '{}', so its files could be those of a job named '{}' (its per-frame or "
+                         "metadata files); choose a name without it",
+                         n, *ending, n.substr(0, n.size() - ending->size())),
+             "name");
     }
     if (r_.has("timeout_s") && r_.number("timeout_s") > ctx_.limits.max_request_seconds)
       fail("request.limit", fmt::format("timeout_s: {:g} s is more than the limit {:g} s", r_.number("timeout_s"),

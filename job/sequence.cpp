@@ -31,9 +31,11 @@ namespace fs = std::filesystem;
 
 bool names_a_sequence(const fs::path& spec) { return io::names_a_file_sequence(spec); }
 
-Result<std::vector<fs::path>> exr_sequence_files(const fs::path& spec) {
+Result<std::vector<fs::path>> exr_sequence_files(const fs::path& spec, const io::InputFiles& files) {
   if (spec.empty()) return make_error("input.sequence", "a sequence of EXR frames is needed (a pattern, a directory or a list file)", "images");
-  return io::file_sequence(spec);
+  io::FileSequenceRules rules;
+  rules.files = files;
+  return io::file_sequence(spec, rules);
 }
 
 bool sets_sequence_settings(const nlohmann::json& request) {
@@ -245,7 +247,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
   nlohmann::json files = nlohmann::json::object();
   const std::string stem = outbase.filename().string();
   for (const auto& kind : sum.frame_kinds) {
-    const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+    const std::string ext = kind == "sidecar" ? std::string(kSidecarSuffix) : std::string(find_output(kind)->suffix);
     files["frames"][kind] = fmt::format("{}.%05d{}", stem, ext);
     out.files["frames." + kind] = fmt::format("{}.%05d{}", outbase.string(), ext);
   }
@@ -258,8 +260,8 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
     out.files[kind] = paths.back().string();
   };
   if (metadata.has_dynamic_metadata()) {
-    add("hdr10plus", ".hdr10plus.json", metadata.hdr10plus_json().dump(2) + "\n");
-    add("dovi", ".dovi.json", metadata.dovi_json().dump(2) + "\n");
+    add("hdr10plus", std::string(kHdr10PlusSuffix), metadata.hdr10plus_json().dump(2) + "\n");
+    add("dovi", std::string(kDoviSuffix), metadata.dovi_json().dump(2) + "\n");
   }
   nlohmann::json timings = sum.timings;
   if (video) {
@@ -273,7 +275,7 @@ Result<SequenceResult> write_sequence_outputs(const FrameRequest& request, const
     files["video"] = video->path.filename().string();
     out.files["video"] = video->path.string();
   }
-  const fs::path sidecar = outbase.string() + ".json";
+  const fs::path sidecar = outbase.string() + std::string(kSidecarSuffix);
   files["sidecar"] = sidecar.filename().string();
   j["files"] = files;
   j["timings_ms"] = timings;
@@ -328,6 +330,10 @@ class SequenceSink {
       : request_(r), outbase_(outbase), options_(options), video_settings_(std::move(video)), total_(total) {}
   ~SequenceSink() {
     if (!finished_) remove_written();
+    if (!staging_.empty()) {
+      std::error_code ec;
+      fs::remove_all(staging_, ec);
+    }
   }
 
   Result<void> consume(FrameItem item) {
@@ -343,6 +349,11 @@ class SequenceSink {
       }
     }
     if (!item.result.files.empty()) {
+      if (!options_.shard && staging_.empty()) {  // the per-frame files wait there until the end
+        auto staging = io::make_staging_dir(outbase_);
+        if (!staging) return staging.error();
+        staging_ = std::move(*staging);
+      }
       auto written = write_outputs(item.result, frame_base(dumps_base(), item.index));
       if (!written) return written.error();
       const bool first = sum_.frames.empty();
@@ -397,6 +408,7 @@ class SequenceSink {
     if (!metadata_) return make_error("internal", "a sequence finished without frames");
     if (options_.shard) return finish_shard();
     metadata_->finish();
+    if (auto ok = commit_staged_frames(); !ok) return ok.error();
     std::optional<video::VideoResult> video;
     if (writer_) {
       const auto t0 = Clock::now();
@@ -409,6 +421,11 @@ class SequenceSink {
     auto out = write_sequence_outputs(request_, outbase_, fps, sum_, *metadata_, video);
     if (!out) return out.error();
     finished_ = true;
+    if (!staging_.empty()) {  // the commit: the journal goes, every file is final
+      std::error_code ec;
+      fs::remove_all(staging_, ec);
+      staging_.clear();
+    }
     return out;
   }
 
@@ -455,8 +472,33 @@ class SequenceSink {
     return out;
   }
 
-  // Where a shard puts what the merge will move: the work dir.
-  fs::path dumps_base() const { return options_.shard ? options_.shard->work_dir / "frames" / "frame" : outbase_; }
+  // The sequence is done: the journal names every final file it will have (so that a start-up
+  // sweep after a crash from here on removes them: io::sweep_staging), then the per-frame
+  // files move from the staging directory to their final names.
+  Result<void> commit_staged_frames() {
+    if (staging_.empty()) return {};
+    const fs::path dir = outbase_.parent_path();
+    const std::string stem = outbase_.filename().string();
+    std::vector<std::pair<fs::path, fs::path>> moves;
+    std::vector<std::string> journal;
+    for (auto& p : written_) {
+      const fs::path from = p, to = dir / from.filename();
+      moves.emplace_back(from, to);
+      journal.push_back(to.filename().string());
+      p = to.string();  // from here on, cleaning up removes the final name (a rename not made leaves a staged file)
+    }
+    for (const auto& suffix : owned_suffixes())
+      if (suffix.find(kFrameNumber) == std::string::npos) journal.push_back(stem + suffix);
+    for (const auto container : {video::Container::mp4, video::Container::mkv})
+      journal.push_back(stem + std::string(video::file_extension(container)));
+    return io::commit_staged(staging_, journal, moves);
+  }
+
+  // Where a shard puts what the merge will move: the work dir; a sequence's per-frame files
+  // wait in its staging directory until it is done.
+  fs::path dumps_base() const {
+    return options_.shard ? options_.shard->work_dir / "frames" / "frame" : staging_ / outbase_.filename();
+  }
   fs::path video_base() const {
     return options_.shard ? options_.shard->work_dir / fmt::format("shard-{}", options_.shard->shard) : outbase_;
   }
@@ -479,6 +521,7 @@ class SequenceSink {
   SequenceSummary sum_;
   nlohmann::json lights_ = nlohmann::json::array();
   std::vector<std::string> written_;
+  fs::path staging_;  // DIR/.NAME.staging-XXXXXXXXXXXX while per-frame files are written
   int scene_ = -1;
   bool finished_ = false;
 };
@@ -499,22 +542,22 @@ struct FrameSource {
   std::vector<fs::path> inputs;  // encode
 };
 
-Result<FrameSource> frame_source(const FrameRequest& request) {
+Result<FrameSource> frame_source(const FrameRequest& request, const io::InputFiles& files = {}) {
   if (!request.sequence) return make_error("internal", "run_sequence needs a request parsed as a sequence");
   if (request.source == Source::pattern) return make_error("request.value", "patterns have no sequence form", "frames");
   FrameSource src;
   src.fps = request.number("fps");
   src.total = request.is_null("frames") ? 1 : static_cast<int>(request.integer("frames"));
   if (request.source == Source::encode) {
-    auto files = exr_sequence_files(request.text("images"));
-    if (!files) return files.error();
-    if (!request.is_null("frames") && src.total > static_cast<int>(files->size()))
+    auto found = exr_sequence_files(request.text("images"), files);
+    if (!found) return found.error();
+    if (!request.is_null("frames") && src.total > static_cast<int>(found->size()))
       return make_error("request.value",
-                        fmt::format("frames: {} asked, {} has {}", src.total, request.text("images"), files->size()),
+                        fmt::format("frames: {} asked, {} has {}", src.total, request.text("images"), found->size()),
                         "frames");
-    if (request.is_null("frames")) src.total = static_cast<int>(files->size());
-    files->resize(static_cast<std::size_t>(src.total));
-    src.inputs = std::move(*files);
+    if (request.is_null("frames")) src.total = static_cast<int>(found->size());
+    found->resize(static_cast<std::size_t>(src.total));
+    src.inputs = std::move(*found);
   } else {
     src.start_s = request.number("start_s");
     src.total_from_scene = request.is_null("frames");
@@ -639,7 +682,7 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
 }  // namespace
 
 Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options) {
-  auto src = frame_source(request);
+  auto src = frame_source(request, options.files);
   if (!src) return src.error();
   const temporal::TemporalSettings ts = temporal_settings(request);
   if (auto ok = temporal::validate(ts); !ok) return ok.error();
@@ -673,7 +716,7 @@ Result<SequenceResult> sequence_body(const FrameRequest& request, const fs::path
                                      shading::Renderer* renderer, std::vector<temporal::FrameDecision>* decided) {
   if (!decided && (outbase.empty() || !outbase.has_filename()))
     return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
-  auto src = frame_source(request);
+  auto src = frame_source(request, options.job.files);
   if (!src) return src.error();
   auto video = video_settings(request);
   if (!video) return video.error();
@@ -906,7 +949,7 @@ Result<SequenceResult> merge_sequence_shards(const FrameRequest& request, const 
       sum.frames.push_back(frames[k]);
       const int index = next_frame + static_cast<int>(k);
       for (const auto& kind : sum.frame_kinds) {
-        const std::string ext = kind == "sidecar" ? ".json" : std::string(find_output(kind)->suffix);
+        const std::string ext = kind == "sidecar" ? std::string(kSidecarSuffix) : std::string(find_output(kind)->suffix);
         const fs::path from = shard_stats[i].parent_path() / "frames" / fmt::format("frame.{:05d}{}", index, ext);
         if (!fs::exists(from)) return make_error("sequence.shard", fmt::format("{}: {} is missing", shard, from.string()));
         moves.emplace_back(from, fs::path(frame_base(outbase, index) + ext));

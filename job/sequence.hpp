@@ -35,7 +35,9 @@ namespace hdrd::job {
 // that exists, from the lowest, consecutive: a gap is an error naming the missing frame),
 // a directory (its *.exr files in name order), or a list file (one path per line, relative
 // to the list's directory; blank lines and '#' comments skipped). Errors: input.sequence.
-Result<std::vector<std::filesystem::path>> exr_sequence_files(const std::filesystem::path& spec);
+// `files`: where a list file is opened (JobOptions::files).
+Result<std::vector<std::filesystem::path>> exr_sequence_files(const std::filesystem::path& spec,
+                                                              const io::InputFiles& files = {});
 // True for what only a sequence can be: a printf pattern, a directory, a list file (.txt, .lst).
 bool names_a_sequence(const std::filesystem::path& spec);
 // True when the request JSON sets any setting marked `sequence` (job/settings.hpp).

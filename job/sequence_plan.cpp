@@ -155,14 +155,12 @@ Result<void> write_sequence_plan(const SequencePlan& plan) {
 }
 
 Result<SequencePlan> read_sequence_plan(const fs::path& plan_path) {
-  std::error_code ec;
-  const auto size = fs::file_size(plan_path, ec);
-  if (ec) return plan_error(plan_path, "cannot read it: " + ec.message());
-  if (size > (1u << 30)) return plan_error(plan_path, "larger than 1 GiB");
-  std::ifstream in(plan_path, std::ios::binary);
-  std::string text(static_cast<std::size_t>(size), '\0');
-  if (!in.read(text.data(), static_cast<std::streamsize>(size))) return plan_error(plan_path, "cannot read it");
-  const json j = json::parse(text, nullptr, false);
+  // Opened as the file model opens a file given as is (encode/io/beneath.hpp): never
+  // waiting on a FIFO, refusing what is not a regular file.
+  auto text = io::InputFiles{}.read(plan_path, std::size_t{1} << 30);
+  if (!text && text.error().code == "file.too_large") return plan_error(plan_path, "larger than 1 GiB");
+  if (!text) return plan_error(plan_path, "cannot read it: " + text.error().message);
+  const json j = json::parse(*text, nullptr, false);
   if (!j.is_object() || j.value("format", "") != "hdrd-sequence-plan")
     return plan_error(plan_path, "not an hdrd sequence plan (format hdrd-sequence-plan)");
   if (j.value("format_version", 0) != 1) return plan_error(plan_path, "format_version is not 1");

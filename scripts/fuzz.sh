@@ -6,7 +6,7 @@
 #
 # Usage: scripts/fuzz.sh [-t SECONDS_PER_TARGET] [TARGET...]
 #   targets: edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz
-#            slurm_fuzz avif_boxes_fuzz radiance_hdr_fuzz video_bitstream_fuzz log_escape_fuzz (default: all)
+#            slurm_fuzz avif_boxes_fuzz radiance_hdr_fuzz video_bitstream_fuzz log_escape_fuzz beneath_fuzz (default: all)
 # env: BUILD_DIR (default build-fuzz), JOBS, PARALLEL (targets fuzzed at once, default 1), FUZZ_TIMEOUT (seconds one input may take, default 10;
 #      raise it on a shared machine where the fuzzer can be starved of CPU: a starved unit
 #      is reported as a timeout although it runs in milliseconds, and ends the run)
@@ -22,7 +22,7 @@ done
 shift $((OPTIND - 1))
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(edid_fuzz exr_fuzz png_fuzz cube_fuzz gltf_fuzz scene_json_fuzz request_fuzz query_fuzz multipart_fuzz
-                                    slurm_fuzz avif_boxes_fuzz radiance_hdr_fuzz video_bitstream_fuzz log_escape_fuzz)
+                                    slurm_fuzz avif_boxes_fuzz radiance_hdr_fuzz video_bitstream_fuzz log_escape_fuzz beneath_fuzz)
 build_dir=${BUILD_DIR:-build-fuzz}
 command -v clang++-14 >/dev/null || { echo "fuzz: clang++-14 is missing (scripts/install-deps.sh installs it)" >&2; exit 2; }
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \

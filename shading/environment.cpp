@@ -72,16 +72,6 @@ EnvironmentMap convert(const Image& img, const color::Mat3& m, double gain, std:
   return out;
 }
 
-Result<std::array<std::uint8_t, 4>> signature(const std::filesystem::path& path) {
-  std::array<std::uint8_t, 4> magic{};
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return make_error("environment.file", fmt::format("cannot open environment '{}'", path.string()), "environment.file");
-  f.read(reinterpret_cast<char*>(magic.data()), 4);
-  if (f.gcount() != 4)
-    return make_error("environment.format", fmt::format("'{}' is too short to be an image", path.string()), "environment.file");
-  return magic;
-}
-
 Result<void> check_layout(const EnvironmentMap& m, const std::filesystem::path& path, std::vector<std::string>& warnings) {
   const double aspect = double(m.width) / m.height;
   if (m.height < 4 || aspect < 1.5 || aspect > 2.5)
@@ -308,21 +298,29 @@ Vec3 IrradianceCube::lookup(Vec3 d) const {
   return faces[static_cast<std::size_t>(f)][static_cast<std::size_t>(j) * size + i];
 }
 
-Result<EnvironmentMap> load_environment_map(const std::filesystem::path& path, std::vector<std::string>& warnings) {
-  auto magic = signature(path);
-  if (!magic) return magic.error();
+Result<EnvironmentMap> load_environment_map(const std::filesystem::path& path, std::vector<std::string>& warnings,
+                                           const io::InputFiles& files) {
+  // Read once, through the file model; both decoders then parse these bytes.
+  auto file = files.read(path, std::size_t{4} << 30);
+  if (!file) return io::reader_error(file.error(), "environment.file", "environment.file", "environment.file");
+  if (file->size() < 4)
+    return make_error("environment.format", fmt::format("'{}' is too short to be an image", path.string()), "environment.file");
+  const std::span bytes(reinterpret_cast<const std::uint8_t*>(file->data()), file->size());
+  const auto* magic = bytes.data();
   EnvironmentMap map;
-  if ((*magic)[0] == 0x76 && (*magic)[1] == 0x2f && (*magic)[2] == 0x31 && (*magic)[3] == 0x01) {
-    auto exr = io::read_exr(path);
+  if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
+    auto exr = io::read_exr_memory(bytes, {}, path.string());
     if (!exr) return make_error(exr.error().code, exr.error().message, "environment.file");
     for (auto& w : exr->warnings) warnings.push_back(fmt::format("environment: {}", w));
     if (!exr->white_luminance)
       warnings.push_back(fmt::format("environment '{}' has no whiteLuminance: its values are read as cd/m2 (times scale)",
                                      path.filename().string()));
     map = convert(exr->image, exr_to_rec709(*exr), exr->white_luminance.value_or(1.0), warnings);
-  } else if ((*magic)[0] == '#' && (*magic)[1] == '?') {
-    auto hdr = read_radiance_hdr(path);
-    if (!hdr) return hdr.error();
+  } else if (magic[0] == '#' && magic[1] == '?') {
+    auto hdr = read_radiance_hdr_memory(bytes);
+    if (!hdr)
+      return make_error(hdr.error().code, fmt::format("{}: {}", path.filename().string(), hdr.error().message),
+                        hdr.error().field);
     for (auto& w : hdr->warnings) warnings.push_back(fmt::format("environment: {}", w));
     map = convert(hdr->image, radiance_to_rec709(*hdr), 1.0, warnings);
   } else {
@@ -344,7 +342,7 @@ Result<EnvironmentLighting> build_environment(const EnvironmentSpec& spec) {
     if (sky.sun) out.sun = preetham_sun(sky);
   } else {
     out.description = spec.file.filename().string();
-    auto map = load_environment_map(spec.file, out.warnings);
+    auto map = load_environment_map(spec.file, out.warnings, spec.files);
     if (!map) return map.error();
     out.map = std::move(*map);
   }

@@ -19,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 #include "shading/math.hpp"
 
@@ -41,6 +42,9 @@ struct EnvironmentSpec {
   // = cd/m2; files without whiteLuminance and Radiance pictures: value x scale = cd/m2.
   double scale = 1.0;
   double rotation_deg = 0;
+  // Where `file` is opened, at the moment it is read (encode/io/beneath.hpp): beneath the
+  // daemon's asset root, or as given.
+  io::InputFiles files;
 };
 
 // Checks ranges and that exactly one source is given; `field` prefixes error fields.
@@ -122,7 +126,8 @@ struct EnvironmentLighting {
 // into linear Rec.709 cd/m2 before scale: EXR chromaticities / Radiance PRIMARIES and XYZE
 // converted, EXR whiteLuminance applied, Radiance EXPOSURE divided out; NaN, Inf and
 // negative values become 0 (with a warning that counts them).
-Result<EnvironmentMap> load_environment_map(const std::filesystem::path& path, std::vector<std::string>& warnings);
+Result<EnvironmentMap> load_environment_map(const std::filesystem::path& path, std::vector<std::string>& warnings,
+                                           const io::InputFiles& files = {});
 Result<EnvironmentLighting> build_environment(const EnvironmentSpec& spec);
 // What identifies the CPU and GPU work of an environment (scale and rotation excluded:
 // they apply per frame): file identity (path, size, modification time) or sky parameters.

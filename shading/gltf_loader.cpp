@@ -77,10 +77,14 @@ bool guarded_image_loader(tinygltf::Image* image, const int index, std::string* 
 }
 
 // Confined file access (SceneLoadOptions::allow_files = false): only files inside the
-// glTF's own directory. user_data points at that directory's canonical path.
+// glTF's own directory, opened through the scene's InputFiles. user_data points at this.
+struct Confinement {
+  std::filesystem::path dir;  // canonical
+  const io::InputFiles* files = nullptr;
+};
 bool confined(const std::string& path, void* user) {
   if (!user) return false;
-  const auto& root = *static_cast<const std::filesystem::path*>(user);
+  const auto& root = static_cast<const Confinement*>(user)->dir;
   std::error_code ec;
   const auto p = std::filesystem::weakly_canonical(path, ec);
   if (ec || root.empty()) return false;
@@ -94,7 +98,24 @@ bool confined_read(std::vector<unsigned char>* out, std::string* err, const std:
     if (err) *err += "external file '" + path + "' refused: outside the scene's directory\n";
     return false;
   }
-  return tinygltf::ReadWholeFile(out, err, path, nullptr);
+  auto bytes = static_cast<const Confinement*>(user)->files->read(path, kMaxFileBytes);
+  if (!bytes) {
+    if (err) *err += one_line(bytes.error().message) + "\n";
+    return false;
+  }
+  out->assign(bytes->begin(), bytes->end());
+  return true;
+}
+// Unconfined (the CLI): any file, still through InputFiles, so a FIFO is refused, not waited on.
+bool plain_exists(const std::string& path, void*) { return tinygltf::FileExists(path, nullptr); }
+bool plain_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  auto bytes = static_cast<const Confinement*>(user)->files->read(path, kMaxFileBytes);
+  if (!bytes) {
+    if (err) *err += one_line(bytes.error().message) + "\n";
+    return false;
+  }
+  out->assign(bytes->begin(), bytes->end());
+  return true;
 }
 bool no_write(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
 
@@ -678,9 +699,10 @@ Result<tinygltf::Model> parse(std::span<const std::uint8_t> bytes, const std::fi
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&guarded_image_loader, nullptr);
   std::error_code ec;
-  std::filesystem::path root = base_dir.empty() ? std::filesystem::path() : std::filesystem::weakly_canonical(base_dir, ec);
-  if (ec) root.clear();
+  Confinement root{base_dir.empty() ? std::filesystem::path() : std::filesystem::weakly_canonical(base_dir, ec), &options.files};
+  if (ec) root.dir.clear();
   if (!options.allow_files) loader.SetFsCallbacks({&confined_exists, &no_expand, &confined_read, &no_write, &root});
+  else loader.SetFsCallbacks({&plain_exists, &tinygltf::ExpandFilePath, &plain_read, &no_write, &root});
   tinygltf::Model model;
   std::string err, warn;
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
@@ -723,22 +745,18 @@ void add_default_rig(Scene& s, bool rig) {
   if (!s.camera) s.warnings.push_back("glTF file has no camera: using a default camera that frames the scene");
 }
 
-Result<std::vector<std::uint8_t>> read_file(const std::filesystem::path& path) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) return make_error("gltf.file", fmt::format("cannot read '{}': {}", path.string(), ec.message()));
-  if (size > kMaxFileBytes) return make_error("gltf.file", fmt::format("'{}' is larger than 1 GiB", path.string()));
-  std::ifstream f(path, std::ios::binary);
-  std::vector<std::uint8_t> bytes(size);
-  if (!f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
-    return make_error("gltf.file", fmt::format("cannot read '{}'", path.string()));
-  return bytes;
+Result<std::vector<std::uint8_t>> read_file(const std::filesystem::path& path, const io::InputFiles& files) {
+  auto bytes = files.read(path, kMaxFileBytes);
+  if (!bytes && bytes.error().code == "file.too_large")
+    return make_error("gltf.file", fmt::format("'{}' is larger than 1 GiB", path.string()));
+  if (!bytes) return io::reader_error(bytes.error(), "gltf.file", "gltf.file");
+  return std::vector<std::uint8_t>(bytes->begin(), bytes->end());
 }
 
 }  // namespace
 
 Result<Scene> load_gltf_raw(const std::filesystem::path& path, const SceneLoadOptions& options) {
-  auto bytes = read_file(path);
+  auto bytes = read_file(path, options.files);
   if (!bytes) return bytes.error();
   auto s = convert(*bytes, path.parent_path(), options);
   if (!s) return make_error(s.error().code, fmt::format("{}: {}", path.filename().string(), s.error().message));

@@ -278,15 +278,11 @@ Result<RadianceImage> read_radiance_hdr_memory(std::span<const std::uint8_t> byt
   return out;
 }
 
-Result<RadianceImage> read_radiance_hdr(const std::filesystem::path& path) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) return hdr_error("file", fmt::format("cannot read '{}': {}", path.string(), ec.message()));
-  if (size > kMaxFileBytes) return hdr_error("file", fmt::format("'{}' is larger than 4 GiB", path.string()));
-  std::vector<std::uint8_t> bytes(size);
-  std::ifstream f(path, std::ios::binary);
-  if (!f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
-    return hdr_error("file", fmt::format("cannot read '{}'", path.string()));
+Result<RadianceImage> read_radiance_hdr(const std::filesystem::path& path, const io::InputFiles& files) {
+  auto file = files.read(path, kMaxFileBytes);
+  if (!file && file.error().code == "file.too_large") return hdr_error("file", fmt::format("'{}' is larger than 4 GiB", path.string()));
+  if (!file) return io::reader_error(file.error(), "hdr.file", "hdr.file", "environment.file");
+  const std::span bytes(reinterpret_cast<const std::uint8_t*>(file->data()), file->size());
   auto r = read_radiance_hdr_memory(bytes);
   if (!r) return make_error(r.error().code, fmt::format("{}: {}", path.filename().string(), r.error().message),
                             r.error().field);

@@ -15,6 +15,7 @@
 
 #include "encode/colour/color.hpp"
 #include "encode/image.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::shading {
@@ -34,6 +35,6 @@ struct RadianceImage {
 // new-style (per-channel) run-length scanlines. Decoding follows Radiance's colr_color():
 // value = (mantissa + 0.5) * 2^(exponent - 136), 0 for exponent 0.
 Result<RadianceImage> read_radiance_hdr_memory(std::span<const std::uint8_t> bytes);
-Result<RadianceImage> read_radiance_hdr(const std::filesystem::path& path);
+Result<RadianceImage> read_radiance_hdr(const std::filesystem::path& path, const io::InputFiles& files = {});
 
 }  // namespace hdrd::shading

@@ -426,6 +426,7 @@ void read_environment(Reader& r, const json& j, Scene& s, const SceneLoadOptions
     if (!options.allow_files) return r.fail(p + ".file", "file references are not allowed here");
     const std::filesystem::path path(file);
     e.file = path.is_absolute() ? path : options.base_dir / path;
+    e.files = options.files;
   }
   e.scale = r.number(j, p, "scale", 1, 0, kBig);
   e.rotation_deg = r.number(j, p, "rotation_deg", 0, -3600, 3600);

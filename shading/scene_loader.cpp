@@ -15,16 +15,13 @@ bool has_extension(const std::filesystem::path& p, std::string_view ext) {
 }
 
 Result<Scene> load_json_file(const std::filesystem::path& path, const SceneLoadOptions& options) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec) return make_error("scene.file", fmt::format("cannot read '{}': {}", path.string(), ec.message()), "scene");
-  if (size > kMaxSceneJsonBytes) return make_error("scene.file", fmt::format("'{}' is larger than 256 MiB", path.string()), "scene");
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
+  auto text = options.files.read(path, kMaxSceneJsonBytes);
+  if (!text && text.error().code == "file.too_large")
+    return make_error("scene.file", fmt::format("'{}' is larger than 256 MiB", path.string()), "scene");
+  if (!text) return io::reader_error(text.error(), "scene.file", "scene.file", "scene");
   SceneLoadOptions o = options;
   o.base_dir = path.parent_path();  // the file's own references resolve next to it
-  auto s = parse_scene_json_text(ss.str(), o);
+  auto s = parse_scene_json_text(*text, o);
   if (!s) return make_error(s.error().code, fmt::format("{}: {}", path.filename().string(), s.error().message),
                             s.error().field);
   if (s->name == "json") s->name = path.stem().string();
@@ -43,7 +40,8 @@ Result<Scene> load_scene(std::string_view name_or_path, const SceneLoadOptions& 
                                   name_or_path, fmt::join(builtin_scene_names(), ", ")),
                       "scene");
   const std::filesystem::path path = given.is_absolute() ? given : options.base_dir / given;
-  if (!std::filesystem::exists(path))
+  std::error_code ec;  // for the message only: the file is opened when it is read (options.files)
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec)) && !std::filesystem::exists(path, ec))
     return make_error("scene.file", fmt::format("scene file '{}' does not exist", path.string()), "scene");
   if (has_extension(path, ".json")) return load_json_file(path, options);
   return load_gltf_file(path, options);

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 #include "shading/scene.hpp"
 
@@ -27,6 +28,10 @@ struct SceneLoadOptions {
   // files, and a glTF file may read its buffers and images only from its own directory
   // (no absolute paths, no ".."). The scene path given to load_scene is always read.
   bool allow_files = true;
+  // Where every file a scene reads is opened, at the moment it is read (the scene itself, a
+  // glTF's buffers and images, an environment map): beneath the daemon's asset root, or as
+  // given (encode/io/beneath.hpp).
+  io::InputFiles files;
   SceneLimits limits;
   // Luminance of a glTF emissive value of 1.0 (emissiveFactor x emissive_strength x
   // texture). glTF itself does not fix the unit; the request's gltf_emissive_nits (the

@@ -263,13 +263,20 @@ std::optional<double> check_baked_peak(const GradeSettings& s, const std::option
 Result<std::shared_ptr<const Grade>> load_lut_file(const GradeSettings& s, double target_peak_nits,
                                                    std::vector<std::string>* warnings) {
   const std::filesystem::path path(s.lut_path);
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    return make_error("grade.file", fmt::format("{}: no such LUT file", s.lut_path), "lut");
+  // Opened through the file model: a link, a FIFO, a hard link or a path outside the root is
+  // refused here; a .cube is then parsed from this descriptor's bytes.
+  auto fd = s.files.open(path);
+  if (!fd) {
+    Error e = io::reader_error(fd.error(), "grade.file", "grade.file", "lut");
+    if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", s.lut_path, fd.error().message);
+    return e;
+  }
   const auto interp = s.trilinear ? lut::Interpolation::trilinear : lut::Interpolation::tetrahedral;
   lut::CubeFile cube;
   if (is_cube(path)) {
-    auto parsed = lut::read_cube(path);
+    auto text = io::read_all(fd->get(), s.lut_path, std::size_t(1) << 30);
+    if (!text) return io::reader_error(text.error(), "cube.io", "cube.io", "lut");
+    auto parsed = lut::parse_cube(*text, s.lut_path);
     if (!parsed) return parsed.error();
     cube = std::move(*parsed);
   }

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::grade {
@@ -70,6 +71,10 @@ struct GradeSettings {
   std::string ocio_look;
   std::string ocio_colorspace;
   std::string ocio_display, ocio_view;
+  // Where lut_path and ocio_config are opened (encode/io/beneath.hpp): beneath the daemon's
+  // asset root, or as given. A .cube is read from the descriptor that was checked;
+  // OpenColorIO opens its files itself, so those are checked through here just before.
+  io::InputFiles files;
   bool empty() const { return lut_path.empty() && ocio_look.empty() && ocio_display.empty() && ocio_colorspace.empty(); }
 };
 

@@ -378,19 +378,13 @@ Result<CubeFile> parse_cube(std::string_view text, std::string_view name) {
   return CubeParser(name).run(text);
 }
 
-Result<CubeFile> read_cube(const std::filesystem::path& path) {
-  std::error_code ec;
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (ec) return make_error("cube.io", fmt::format("{}: cannot read: {}", path.string(), ec.message()), "lut");
+Result<CubeFile> read_cube(const std::filesystem::path& path, const io::InputFiles& files) {
   // 256^3 entries at ~40 bytes a line, with room for comments.
-  if (bytes > (std::uintmax_t(1) << 30))
-    return make_error("cube.size", fmt::format("{}: {} bytes is too large for a .cube", path.string(), bytes), "lut");
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return make_error("cube.io", fmt::format("{}: cannot open", path.string()), "lut");
-  std::string text(static_cast<std::size_t>(bytes), '\0');
-  f.read(text.data(), static_cast<std::streamsize>(bytes));
-  text.resize(static_cast<std::size_t>(f.gcount()));
-  return parse_cube(text, path.string());
+  auto text = files.read(path, std::size_t(1) << 30);
+  if (!text && text.error().code == "file.too_large")
+    return make_error("cube.size", fmt::format("{}: too large for a .cube (over 1 GiB)", path.string()), "lut");
+  if (!text) return io::reader_error(text.error(), "cube.io", "cube.io", "lut");
+  return parse_cube(*text, path.string());
 }
 
 // ---- Writing --------------------------------------------------------------------------

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "encode/grade/grade.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 #include "encode/tone/tonemap.hpp"
 
@@ -74,7 +75,8 @@ struct CubeFile {
 // "cube.syntax" (malformed line), "cube.size" (size out of range or entry count wrong),
 // "cube.domain" (min >= max), "cube.value" (non-finite entry). `name` labels messages.
 Result<CubeFile> parse_cube(std::string_view text, std::string_view name = "cube");
-Result<CubeFile> read_cube(const std::filesystem::path& path);
+// `files`: where the path is opened (encode/io/beneath.hpp; default: as given, a FIFO refused).
+Result<CubeFile> read_cube(const std::filesystem::path& path, const io::InputFiles& files = {});
 // Writes with 9 significant digits, so float tables round-trip exactly.
 Result<std::string> format_cube(const CubeFile& cube);
 Result<void> write_cube(const CubeFile& cube, const std::filesystem::path& path);

@@ -130,8 +130,12 @@ Result<void> check_shape(const PngShape& s, const std::filesystem::path& path, i
 }  // namespace
 
 Result<Strip> read_strip_png(const std::filesystem::path& path, std::string* text, std::vector<std::string>* warnings) {
-  File f(std::fopen(path.c_str(), "rb"));
+  // Opened as the file model opens a file given as is: a FIFO is refused, not waited on.
+  auto fd = io::open_regular(path);
+  if (!fd) return io::reader_error(fd.error(), "strip.io", "strip.io", "input");
+  File f(::fdopen(fd->get(), "rb"));
   if (!f) return make_error("strip.io", fmt::format("{}: cannot open", path.string()), "input");
+  fd->release();  // the FILE owns it now
   png_byte sig[8] = {};
   if (std::fread(sig, 1, 8, f.get()) != 8 || png_sig_cmp(sig, 0, 8) != 0)
     return make_error("strip.format", fmt::format("{}: not a PNG file", path.string()), "input");

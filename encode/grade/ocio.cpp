@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <functional>
 #include <mutex>
+#include <sstream>
 
 #include "encode/colour/color.hpp"
 #include "encode/tone/tonemap.hpp"
@@ -119,17 +120,26 @@ std::string colour_space_names(const OCIO::Config& c) {
   });
 }
 
-Result<OCIO::ConstConfigRcPtr> open_config(const std::string& explicit_path, std::string& used) {
+// A config named by the request is read through the file model (`files`); $OCIO is the
+// admin's own. OpenColorIO then opens the LUTs the config names itself.
+Result<OCIO::ConstConfigRcPtr> open_config(const std::string& explicit_path, std::string& used, const io::InputFiles& files) {
   used = explicit_path;
   if (used.empty())
     if (const char* env = std::getenv("OCIO")) used = env;
   if (used.empty())
     return make_error("grade.ocio", "no OpenColorIO config: pass --ocio-config FILE or set $OCIO", "ocio_config");
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(used, ec))
-    return make_error("grade.ocio", fmt::format("OpenColorIO config {}: no such file", used), "ocio_config");
+  auto text = (explicit_path.empty() ? io::InputFiles{} : files).read(used, std::size_t(64) << 20);
+  if (!text) {
+    Error e = io::reader_error(text.error(), "grade.ocio", "grade.ocio", "ocio_config");
+    e.message = fmt::format("OpenColorIO config {}: {}", used, e.message);
+    return e;
+  }
   try {
-    return OCIO::Config::CreateFromFile(used.c_str());
+    std::istringstream in(*text);
+    auto config = OCIO::Config::CreateFromStream(in)->createEditableCopy();
+    // As CreateFromFile: the config's relative search paths start at its own directory.
+    config->setWorkingDir(std::filesystem::absolute(used).parent_path().string().c_str());
+    return OCIO::ConstConfigRcPtr(config);
   } catch (const std::exception& e) {
     return make_error("grade.ocio", fmt::format("OpenColorIO config {}: {}", used, one_line(e.what())), "ocio_config");
   }
@@ -173,7 +183,7 @@ Result<std::string> check_colour_space(const OCIO::Config& cfg, const std::strin
 
 Result<ConfigContext> config_context(const grade::GradeSettings& s, std::vector<std::string>* warnings) {
   ConfigContext ctx;
-  auto base = open_config(s.ocio_config, ctx.path);
+  auto base = open_config(s.ocio_config, ctx.path, s.files);
   if (!base) return base.error();
   ctx.cfg = (*base)->createEditableCopy();
   const bool names_working = !s.ocio_colorspace.empty() && s.lut_path.empty() &&
@@ -259,9 +269,11 @@ Result<ConfigGrade> build_config_grade(ConfigContext& ctx, const grade::GradeSet
   if (!s.lut_path.empty()) {  // a LUT in a named colour space
     auto cs = check_colour_space(*ctx.cfg, s.ocio_colorspace);
     if (!cs) return cs.error();
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(s.lut_path, ec))
-      return make_error("grade.file", fmt::format("{}: no such LUT file", s.lut_path), "lut");
+    if (auto fd = s.files.open(s.lut_path); !fd) {  // OpenColorIO opens it itself, right after
+      Error e = io::reader_error(fd.error(), "grade.file", "grade.file", "lut");
+      if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", s.lut_path, fd.error().message);
+      return e;
+    }
     auto to = OCIO::ColorSpaceTransform::Create();
     to->setSrc(ctx.working.c_str());
     to->setDst(cs->c_str());

@@ -8,6 +8,7 @@
 #include <random>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -210,6 +211,67 @@ bool is_atomic_write_temporary(std::string_view name) {
   const std::string_view digits = name.substr(name.size() - kTempDigits);
   if (name.substr(name.size() - kTempDigits - kTempMarker.size(), kTempMarker.size()) != kTempMarker) return false;
   return digits.find_first_not_of("0123456789abcdef") == std::string_view::npos;
+}
+
+namespace {
+constexpr std::string_view kStagingMarker = ".staging-";
+constexpr std::string_view kJournalName = "journal";
+}  // namespace
+
+bool is_staging_dir_name(std::string_view name) {
+  if (name.size() < 1 + 1 + kStagingMarker.size() + kTempDigits || name.front() != '.') return false;
+  const std::string_view digits = name.substr(name.size() - kTempDigits);
+  if (name.substr(name.size() - kTempDigits - kStagingMarker.size(), kStagingMarker.size()) != kStagingMarker) return false;
+  return digits.find_first_not_of("0123456789abcdef") == std::string_view::npos;
+}
+
+Result<fs::path> make_staging_dir(const fs::path& outbase) {
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  const fs::path dir = outbase.has_parent_path() ? outbase.parent_path() : fs::path(".");
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const fs::path staging =
+        dir / fmt::format(".{}{}{:012x}", outbase.filename().string(), kStagingMarker, rng() & 0xffffffffffffull);
+    if (::mkdir(staging.c_str(), 0777) == 0) return staging;
+    if (errno != EEXIST) return write_error(staging, "cannot create the staging directory", errno);
+  }
+  return write_error(outbase, "cannot create the staging directory", EEXIST);
+}
+
+Result<void> commit_staged(const fs::path& staging, const std::vector<std::string>& journal,
+                           const std::vector<std::pair<fs::path, fs::path>>& moves) {
+  std::string text;
+  for (const auto& name : journal) text += name + "\n";
+  if (auto ok = atomic_write(staging / kJournalName, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()),
+                             {.durable = true});
+      !ok)
+    return ok.error();
+  for (const auto& [from, to] : moves)
+    if (::rename(from.c_str(), to.c_str()) != 0) return write_error(to, "cannot rename it into place", errno);
+  return {};
+}
+
+std::size_t sweep_staging(const fs::path& dir) {
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (!is_staging_dir_name(entry.path().filename().string()) || !entry.is_directory(ec) || entry.is_symlink(ec)) continue;
+    // The journal names final files beside the staging directory: bare names only.
+    auto journal = InputFiles{}.read(entry.path() / kJournalName, std::size_t{64} << 20);
+    if (journal) {
+      std::size_t start = 0;
+      while (start < journal->size()) {
+        const std::size_t end = std::min(journal->find('\n', start), journal->size());
+        const std::string name = journal->substr(start, end - start);
+        start = end + 1;
+        if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos) continue;
+        if (::unlink((dir / name).c_str()) == 0) ++removed;
+      }
+    }
+    for (const auto& staged : fs::directory_iterator(entry.path(), ec))
+      removed += staged.path().filename() != kJournalName && staged.is_regular_file(ec) ? 1 : 0;
+    fs::remove_all(entry.path(), ec);
+  }
+  return removed;
 }
 
 Result<void> atomic_write(const fs::path& path, std::span<const std::uint8_t> bytes, const WriteOptions& write) {

@@ -639,25 +639,22 @@ NonFiniteSamples count_non_finite(const ExrImage& image) {
 
 // The whole file is read into memory first: the header pre-scan needs the file size and
 // the compressed file is small next to the decoded float image.
-Result<ExrImage> read_exr(const fs::path& path, const ExrReadOptions& options) {
+Result<ExrImage> read_exr(const fs::path& path, const ExrReadOptions& options, const InputFiles& files) {
   const std::string name = path.string();
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return make_error("exr.missing", fmt::format("cannot read EXR {}: no such file", name));
-  if (fs::is_directory(path, ec))
-    return make_error("exr.unreadable", fmt::format("cannot read EXR {}: is a directory", name));
-  const auto size = fs::file_size(path, ec);
-  std::ifstream file(path, std::ios::binary);
-  if (ec || !file) return make_error("exr.unreadable", fmt::format("cannot read EXR {}: cannot open the file", name));
-  if (size > (std::uintmax_t{4} << 30))
-    return exr_error(name, "exr.size", fmt::format("file is {} bytes; the limit is 4 GiB", size));
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  if (!file.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
-    return make_error("exr.unreadable", fmt::format("cannot read EXR {}: read failed", name));
-  return read_exr_bytes(bytes, name, options);
+  auto fd = files.open(path);
+  if (!fd) return reader_error(fd.error(), "exr.missing", "exr.unreadable");
+  auto bytes = read_all(fd->get(), name, std::size_t{4} << 30);
+  if (!bytes && bytes.error().code == "file.too_large") return exr_error(name, "exr.size", "file is larger than the limit of 4 GiB");
+  if (!bytes) return reader_error(bytes.error(), "exr.missing", "exr.unreadable");
+  return read_exr_bytes({reinterpret_cast<const std::uint8_t*>(bytes->data()), bytes->size()}, name, options);
 }
 
 Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options) {
   return read_exr_bytes(bytes, "<memory>", options);
+}
+
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options, const std::string& name) {
+  return read_exr_bytes(bytes, name, options);
 }
 
 Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes) {

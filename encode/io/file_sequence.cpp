@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <sstream>
 #include <optional>
 #include <regex>
 #include <string>
@@ -92,8 +93,10 @@ Result<std::vector<fs::path>> directory_files(const fs::path& dir, const FileSeq
 
 Result<std::vector<fs::path>> list_files(const fs::path& list, const FileSequenceRules& rules) {
   const Failer fail{rules};
-  std::ifstream in(list);
-  if (!in) return fail(fmt::format("{}: cannot open the list file", list.string()));
+  auto text = rules.files.read(list, std::size_t{64} << 20);
+  if (!text && text.error().code.rfind("path.", 0) == 0 && text.error().code != "path.not_found") return text.error();
+  if (!text) return fail(fmt::format("{}: cannot open the list file ({})", list.string(), text.error().message));
+  std::istringstream in(*text);
   std::vector<fs::path> files;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::io {
@@ -24,6 +25,7 @@ struct FileSequenceRules {
   std::function<bool(const std::filesystem::path&)> accept;
   std::string_view what = ".exr file";       // for "the directory holds no ..."
   std::size_t max_files = 1000000;
+  InputFiles files;  // where a list file is opened (encode/io/beneath.hpp)
 };
 
 bool is_frame_pattern(const std::filesystem::path& spec);  // its file name holds one %d / %0Nd

@@ -17,6 +17,7 @@
 #include "encode/colour/color.hpp"
 #include "encode/frame.hpp"
 #include "encode/image.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::io {
@@ -66,8 +67,13 @@ struct ExrReadOptions {
   // float conversion, half the memory; files with any float or uint channel still give `image`.
   bool half_pixels = false;
 };
-Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {});
+// `files`: where the path is opened (encode/io/beneath.hpp): beneath a root (the daemon) or
+// as given (the CLI); either way a FIFO or other non-regular file is refused, never waited on.
+Result<ExrImage> read_exr(const std::filesystem::path& path, const ExrReadOptions& options = {},
+                          const InputFiles& files = {});
 Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options = {});
+// ... naming the bytes `name` in messages (a file already read through InputFiles).
+Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrReadOptions& options, const std::string& name);
 // The pixels the largest part of an EXR declares (its data window), from the header alone:
 // what decoding it would allocate, known before anything is decoded.
 Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes);
@@ -119,7 +125,7 @@ struct PngInfo {
   std::vector<std::uint16_t> samples;             // decoded samples (8-bit widened), row-major, channels interleaved
   int channels = 0;
 };
-Result<PngInfo> read_png_info(const std::filesystem::path& path);
+Result<PngInfo> read_png_info(const std::filesystem::path& path, const InputFiles& files = {});
 Result<PngInfo> read_png_info_memory(std::span<const std::uint8_t> bytes);
 
 // What a PNG declares in its IHDR chunk (PNG spec §11.2.2), read without decoding anything:
@@ -142,7 +148,7 @@ struct PngLimits {
 // sRGB-encoded, straight alpha unless `premultiplied` is declared. png.size when the PNG
 // declares more than `limits`.
 Result<OverlayImage> read_overlay_png(const std::filesystem::path& path, bool premultiplied = false,
-                                      const PngLimits& limits = {});
+                                      const PngLimits& limits = {}, const InputFiles& files = {});
 Result<OverlayImage> read_overlay_png_memory(std::span<const std::uint8_t> bytes, bool premultiplied = false,
                                              const PngLimits& limits = {});
 // Decoded bytes an overlay of w x h holds at most while it is read (the float image and
@@ -187,6 +193,23 @@ Result<std::vector<std::uint8_t>> encode_display_exr(const EncodedFrame& frame);
 // Whether a file name is one of the temporaries atomic writes create (".NAME.tmp-" and 12
 // hex digits) and rename or remove; one left behind belongs to a writer that was killed.
 bool is_atomic_write_temporary(std::string_view filename);
+
+// A sequence's staging directory, so that its files appear under their final names only
+// when it is done (job/sequence.cpp): the per-frame files are written into
+// DIR/.STEM.staging-<12 hex digits>/ and, at the end, the journal there names every final
+// file the sequence will have before the first is renamed into DIR; the directory is
+// removed last. One found at start (sweep_staging) belongs to a sequence that was killed:
+// its files and every final-named file its journal names are removed.
+Result<std::filesystem::path> make_staging_dir(const std::filesystem::path& outbase);
+bool is_staging_dir_name(std::string_view filename);
+// Writes the journal (bare file names in the staging directory's parent), then renames each
+// `moves` pair (staged path, final path). On a failure the renamed ones are where `moves`
+// says: the caller removes them.
+Result<void> commit_staged(const std::filesystem::path& staging, const std::vector<std::string>& journal,
+                           const std::vector<std::pair<std::filesystem::path, std::filesystem::path>>& moves);
+// Removes every staging directory in `dir` and the files their journals name; returns how
+// many files it removed.
+std::size_t sweep_staging(const std::filesystem::path& dir);
 
 enum class DumpFormat { png, exr, raw };
 std::optional<DumpFormat> parse_dump_format(std::string_view s);

@@ -592,21 +592,16 @@ std::uint16_t sample_at(const PngReadJob& job, std::size_t i) {
   return job.pixels[i];
 }
 
-Result<std::vector<std::uint8_t>> slurp(const fs::path& path, const char* what, const char* code_prefix) {
-  const std::string name = path.string();
-  std::error_code ec;
-  if (!fs::exists(path, ec))
-    return make_error(std::string(code_prefix) + ".missing", fmt::format("cannot read {} {}: no such file", what, name));
-  const auto size = fs::file_size(path, ec);
-  if (ec || fs::is_directory(path, ec))
-    return make_error(std::string(code_prefix) + ".unreadable", fmt::format("cannot read {} {}: not a regular file", what, name));
-  if (size > (std::uintmax_t{1} << 31))
-    return make_error(std::string(code_prefix) + ".size", fmt::format("cannot read {} {}: file larger than 2 GiB", what, name));
-  std::ifstream f(path, std::ios::binary);
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  if (!f || !f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
-    return make_error(std::string(code_prefix) + ".unreadable", fmt::format("cannot read {} {}: read failed", what, name));
-  return bytes;
+Result<std::vector<std::uint8_t>> slurp(const fs::path& path, const char* what, const char* code_prefix,
+                                        const InputFiles& files) {
+  const std::string name = path.string(), prefix(code_prefix);
+  auto fd = files.open(path);
+  if (!fd) return reader_error(fd.error(), prefix + ".missing", prefix + ".unreadable");
+  auto bytes = read_all(fd->get(), name, std::size_t{1} << 31);
+  if (!bytes && bytes.error().code == "file.too_large")
+    return make_error(prefix + ".size", fmt::format("cannot read {} {}: file larger than 2 GiB", what, name));
+  if (!bytes) return reader_error(bytes.error(), prefix + ".missing", prefix + ".unreadable");
+  return std::vector<std::uint8_t>(bytes->begin(), bytes->end());
 }
 
 Result<PngInfo> read_png_info_named(std::span<const std::uint8_t> bytes, const std::string& name) {
@@ -649,8 +644,8 @@ Result<OverlayImage> read_overlay_named(std::span<const std::uint8_t> bytes, con
 
 }  // namespace
 
-Result<PngInfo> read_png_info(const fs::path& path) {
-  auto bytes = slurp(path, "PNG", "png");
+Result<PngInfo> read_png_info(const fs::path& path, const InputFiles& files) {
+  auto bytes = slurp(path, "PNG", "png", files);
   if (!bytes) return bytes.error();
   return read_png_info_named(*bytes, path.string());
 }
@@ -672,8 +667,9 @@ std::uint64_t overlay_decode_bytes(std::uint32_t width, std::uint32_t height) {
   return std::uint64_t(width) * height * (16 + 8);
 }
 
-Result<OverlayImage> read_overlay_png(const fs::path& path, bool premultiplied, const PngLimits& limits) {
-  auto bytes = slurp(path, "UI overlay PNG", "png");
+Result<OverlayImage> read_overlay_png(const fs::path& path, bool premultiplied, const PngLimits& limits,
+                                      const InputFiles& files) {
+  auto bytes = slurp(path, "UI overlay PNG", "png", files);
   if (!bytes) return bytes.error();
   return read_overlay_named(*bytes, path.string(), premultiplied, limits);
 }

@@ -119,7 +119,11 @@ TEST(WireError, StatusPerCode) {
       // a missing FFmpeg on the daemon's machine is the daemon's fault; what a codec cannot do is the request's
       {"video.libav", 500},          {"video.codec", 422},
       // issue 28: a malformed target or framing is the client's
-      {"request.target", 400},       {"request.content_length", 400}};
+      {"request.target", 400},       {"request.content_length", 400},
+      // issue 28, the file model (docs/api.md "Security"): a link or hard link refused is 403, a
+      // FIFO or device 422, a result replaced since the job wrote it 410, a colliding name 422
+      {"path.symlink", 403},         {"path.hard_link", 403},        {"path.not_regular", 422},
+      {"job.file_changed", 410},     {"name.collision", 422}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);

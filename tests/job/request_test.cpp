@@ -5,7 +5,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <algorithm>
 
+#include "job/outputs.hpp"
 #include "job/pattern_params.hpp"
 #include "job/request.hpp"
 #include "patterns/patterns.hpp"
@@ -186,6 +189,9 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"format_tiff", R"({"dump":true,"formats":["tiff"]})", "request.value", "formats"},
         Bad{"dump_name_traversal", R"({"dump":true,"name":"../evil"})", "request.value", "name"},
         Bad{"dump_name_hidden", R"({"dump":true,"name":".hidden"})", "request.value", "name"},
+        Bad{"dump_name_frame_of_another", R"({"dump":true,"name":"clash.00001"})", "name.collision", "name"},
+        Bad{"dump_name_metadata_of_another", R"({"dump":true,"name":"a.hdr10plus"})", "name.collision", "name"},
+        Bad{"dump_name_scene_exr_of_another", R"({"dump":true,"name":"a.scene"})", "name.collision", "name"},
         Bad{"dump_yes", R"({"dump":"yes"})", "request.type", "dump"},
         Bad{"file_without_root", R"({"scene":"x.gltf"})", "path.forbidden", "scene"},
         Bad{"base64_garbage", R"({"ui":{"png_base64":"@@@@"}})", "request.value", "ui.png_base64"},
@@ -425,6 +431,47 @@ TEST(Base64, Rfc4648Vectors) {
   EXPECT_FALSE(decode_base64("Zm9v!", 100).ok());
   EXPECT_FALSE(decode_base64("Z", 100).ok());
   EXPECT_EQ(decode_base64("Zm9vYmFy", 5).error().code, "request.limit");
+}
+
+// Name ownership is per file. The oracle: the file names each name would own, spelled out
+// (every output's and metadata file's name, per-frame files for frames 0..2 and 1..99999's
+// "00001"), compared as sets. Two names the parser accepts never share a file; every name
+// it refuses shares one with another name of the set.
+TEST(Request, AcceptedNamesNeverShareAFile) {
+  const std::vector<std::string> names = {"a", "a.00001", "a.00002.png", "a.scene", "a.heatmap", "a.hdr10plus", "a.dovi",
+                                          "a.v2", "a.json", "a.b", "a.b.00001", "a.0001", "a.000001", "clash"};
+  const auto files_of = [](const std::string& n) {
+    std::set<std::string> out;
+    for (const char* s : {".json", ".hdr10plus.json", ".dovi.json", ".mp4", ".mkv"}) out.insert(n + s);
+    for (const auto& o : outputs()) {
+      out.insert(n + std::string(o.suffix));
+      for (const char* frame : {".00000", ".00001", ".00002"}) {
+        out.insert(n + frame + std::string(o.suffix));
+        out.insert(n + frame + ".json");
+      }
+    }
+    return out;
+  };
+  const auto share = [&](const std::string& x, const std::string& y) {
+    const auto fx = files_of(x), fy = files_of(y);
+    return std::any_of(fx.begin(), fx.end(), [&](const std::string& f) { return fy.count(f) != 0; });
+  };
+  std::vector<std::string> accepted;
+  for (const auto& n : names) {
+    auto r = parse(nlohmann::json{{"dump", true}, {"name", n}}.dump());
+    if (r.ok()) {
+      accepted.push_back(n);
+      continue;
+    }
+    EXPECT_EQ(r.error().code, "name.collision") << n << ": " << r.error().message;
+    const bool collides = std::any_of(names.begin(), names.end(), [&](const std::string& m) { return m != n && share(n, m); });
+    EXPECT_TRUE(collides) << n << " refused, but its files are no other name's";
+  }
+  for (std::size_t i = 0; i < accepted.size(); ++i)
+    for (std::size_t j = i + 1; j < accepted.size(); ++j)
+      EXPECT_FALSE(share(accepted[i], accepted[j])) << accepted[i] << " and " << accepted[j] << " share a file";
+  EXPECT_NE(std::find(accepted.begin(), accepted.end(), "a.v2"), accepted.end());
+  EXPECT_NE(std::find(accepted.begin(), accepted.end(), "a.0001"), accepted.end()) << "4 digits are no frame number";
 }
 
 }  // namespace

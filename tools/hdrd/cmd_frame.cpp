@@ -2,8 +2,10 @@
 // Each subcommand's options are the settings table's (job/settings.hpp); what the user typed
 // becomes the same JSON request the daemon takes, parsed by the same parser, run by the
 // same job. Only the transport is the CLI's: paths as given, OUTBASE files, stdout/stderr.
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -115,16 +117,41 @@ std::string per_frame_stages(const nlohmann::json& timings_ms, int frames) {
   }
   return s.empty() ? "no stage timed" : s;
 }
+// Ctrl-C / SIGTERM during a sequence: the job stops at its next frame as the daemon's cancel
+// does (run_sequence removes what it wrote: staged frames, the video spool), then hdrd exits.
+std::atomic<int> g_stop_signal{0};
+extern "C" void on_sequence_signal(int sig) { g_stop_signal.store(sig); }
+
+struct SequenceSignals {
+  SequenceSignals() {
+    old_int = std::signal(SIGINT, on_sequence_signal);
+    old_term = std::signal(SIGTERM, on_sequence_signal);
+  }
+  ~SequenceSignals() {
+    std::signal(SIGINT, old_int);
+    std::signal(SIGTERM, old_term);
+  }
+  void (*old_int)(int) = nullptr;
+  void (*old_term)(int) = nullptr;
+};
 
 // hdrd render --frames N / hdrd encode 'shot.%04d.exr': the sequence job (job/sequence.hpp).
 void run_sequence(const FrameCommand& o, job::FrameRequest request) {
   video::quiet_codec_logs();
   job::SequenceOptions options;
   options.job.threads = static_cast<int>(request.integer("threads"));
+  options.job.should_stop = [] { return g_stop_signal.load() != 0; };
   ProgressBar bar("hdrd:", progress_enabled());
   options.progress = [&bar](const job::SequenceProgress& p) { bar.update(p.frames_done, p.frames_total, p.fps, p.eta_s); };
-  auto result = job::run_sequence(request, o.outbase, options);
+  Result<job::SequenceResult> result = make_error("internal", "not run");
+  {
+    const SequenceSignals signals;
+    result = job::run_sequence(request, o.outbase, options);
+  }
   bar.finish();
+  if (const int sig = g_stop_signal.load(); sig && !result)  // (a signal after the last frame: it is done)
+    throw HdrdError(make_error("request.cancelled", fmt::format("interrupted by {}: stopped, and the sequence's files were removed",
+                                                                sig == SIGINT ? "SIGINT" : "SIGTERM")));
   if (!result) throw HdrdError(result.error());
   progress("per frame: {}", per_frame_stages(result->timings_ms, result->frames));
   print_out(sequence_summary(*result, o.common.json));

@@ -321,5 +321,27 @@ TEST(AtomicWrite, TemporaryNamesAreRecognised) {
     EXPECT_FALSE(is_atomic_write_temporary(other)) << other;
 }
 
+// A sequence's staging directory (job/sequence.cpp): one a killed sequence left is swept with
+// its staged files and the final-named files its journal names, and nothing else.
+TEST(Staging, ASweepRemovesTheStagingAndWhatItsJournalNames) {
+  TempDir tmp;
+  const std::vector<std::uint8_t> bytes{1, 2, 3};
+  auto staging = make_staging_dir(tmp / "shot");
+  ASSERT_TRUE(staging.ok()) << staging.error().message;
+  EXPECT_TRUE(is_staging_dir_name(staging->filename().string())) << *staging;
+  ASSERT_TRUE(atomic_write(*staging / "shot.00000.png", bytes).ok());
+  ASSERT_TRUE(atomic_write(*staging / "shot.00001.png", bytes).ok());
+  ASSERT_TRUE(atomic_write(tmp / "other.png", bytes).ok());  // another job's
+  // Killed during the final renames: frame 0 is in place, frame 1 still staged.
+  ASSERT_TRUE(commit_staged(*staging, {"shot.00000.png", "shot.00001.png", "shot.json", "shot.mp4", "../escape", "a/b"},
+                            {{*staging / "shot.00000.png", tmp / "shot.00000.png"}})
+                  .ok());
+  ASSERT_TRUE(fs::exists(tmp / "shot.00000.png"));
+  EXPECT_EQ(sweep_staging(tmp.path()), 2u);  // shot.00000.png in place, shot.00001.png staged
+  EXPECT_EQ(listing(tmp.path()), (std::set<std::string>{"other.png"}));
+  for (const char* other : {"shot", ".shot", ".shot.staging-0123456789a", ".shot.tmp-0123456789ab", "shot.staging-0123456789ab"})
+    EXPECT_FALSE(is_staging_dir_name(other)) << other;
+}
+
 }  // namespace
 }  // namespace hdrd::io
