@@ -2,7 +2,8 @@
 # Builds the OCI image hdrd:VERSION from Debian packages only, for the cluster
 # (deploy/k8s defaults to it) and for `podman run` / `docker run`: a debootstrap'ed Debian 12
 # minbase root (cached as a tarball, as the package test's), the .deb of scripts/make-deb.sh
-# installed with apt-get (its Depends from Debian, no recommends), apt's lists and caches
+# installed with apt-get (its Depends from Debian, no recommends; systemd-standalone-sysusers
+# for the user, not systemd), apt's lists and caches
 # and the docs dropped, then imported with `podman import`: no registry is pulled from.
 # The entrypoint is hdrd, the user hdrd (created by the package). Prints the image's size.
 #   scripts/make-image.sh [--deb FILE] [--rootfs-only OUT.tar | --from-rootfs ROOT.tar]
@@ -77,7 +78,9 @@ cp /etc/apt/sources.list.d/*.sources "$root/etc/apt/sources.list.d/" 2>/dev/null
 cp "$deb" "$root/tmp/"
 in_root() { chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 DEBIAN_FRONTEND=noninteractive "$@"; }
 in_root apt-get update -qq >&2
-in_root apt-get install -y -q --no-install-recommends "./tmp/$(basename "$deb")" >&2
+# systemd-standalone-sysusers meets the package's "systemd | systemd-standalone-sysusers"
+# (the user is made on install) without systemd itself, which a container does not run.
+in_root apt-get install -y -q --no-install-recommends "./tmp/$(basename "$deb")" systemd-standalone-sysusers >&2
 rm -f "$root/tmp/$(basename "$deb")"
 umount -l "$root/var/cache/apt/archives" "$root/dev" "$root/proc"
 # What a container does not need: apt's lists, logs, docs and man pages (not hdrd's docs).
