@@ -3,9 +3,10 @@
 # pod per shard and a merge Job, on a shared ReadWriteMany claim (deploy/k8s/sequence.yaml.in,
 # docs/cluster.md). Apply it with `kubectl apply -f -`.
 #
-#   deploy/k8s/render.sh PLAN.json OUTBASE --image IMAGE [options]
+#   deploy/k8s/render.sh PLAN.json OUTBASE [--image IMAGE] [options]
 #
-#   --image IMAGE          the container image with hdrd in it (required)
+#   --image IMAGE          the container image with hdrd in it (default hdrd:VERSION, the image
+#                          scripts/make-image.sh builds from this source tree's version)
 #   --name NAME            the Jobs' name prefix (NAME-shards, NAME-merge); default: the
 #                          plan's file name, lower-cased, [a-z0-9-] only
 #   --mount PATH           where the claim is mounted in every pod (default /work); the plan,
@@ -49,7 +50,7 @@ check_dns_label() {  # RFC 1123 label, as Kubernetes requires for names that bec
 under() { case "$2" in "$1"|"$1"/*) return 0 ;; *) return 1 ;; esac; }
 absolute() { case "$2" in /*) ;; *) die "$1 $2: expected an absolute path" ;; esac; }
 
-[ $# -ge 2 ] || die "usage: $prog PLAN.json OUTBASE --image IMAGE [options] (see the header of $0)"
+[ $# -ge 2 ] || die "usage: $prog PLAN.json OUTBASE [--image IMAGE] [options] (see the header of $0)"
 plan=$1 outbase=$2
 shift 2
 image="" name="" mount=/work plan_path="" claim=hdrd-work create_claim="" storage_class=""
@@ -77,7 +78,11 @@ while [ $# -gt 0 ]; do
 done
 
 plan_read "$plan" || exit 1
-[ -n "$image" ] || die "--image IMAGE is required (the image with hdrd in it)"
+if [ -z "$image" ]; then  # the image scripts/make-image.sh tags: hdrd:VERSION of this source tree
+  version=$(sed -n 's/^project(hdrd VERSION \([0-9.]*\).*/\1/p' "$here/../../CMakeLists.txt" 2>/dev/null || true)
+  [ -n "$version" ] || die "--image IMAGE is required (the image with hdrd in it; no source tree version for hdrd:VERSION)"
+  image=hdrd:$version
+fi
 [[ "$image" =~ ^[^[:space:]]+$ ]] || die "--image $image: no spaces allowed"
 if [ -z "$name" ]; then
   name=$(basename "$plan" .json | tr 'A-Z_.' 'a-z--' | tr -cd 'a-z0-9-' | sed 's/^-*//; s/-*$//')

@@ -142,9 +142,16 @@ def main():
     claims = {v["persistentVolumeClaim"]["claimName"] for d in docs for v in d["spec"]["template"]["spec"]["volumes"]}
     check("every pod mounts the one claim", claims == {"hdrd-work"}, str(claims))
 
+    # Without --image, the image scripts/make-image.sh tags: hdrd:VERSION of the source tree.
+    with open(os.path.join(os.path.dirname(RENDER), "../../CMakeLists.txt")) as f:
+        version = re.search(r"^project\(hdrd VERSION ([0-9.]+)", f.read(), re.M).group(1)
+    r = render(plan, outbase, "--mount", work)
+    images = {c["image"] for d in yaml.safe_load_all(r.stdout) for c in d["spec"]["template"]["spec"]["containers"]}
+    check("render.sh defaults to the image make-image.sh tags", r.returncode == 0 and images == {f"hdrd:{version}"},
+          r.stderr.strip() or str(images))
+
     # 2. render.sh refuses what cannot work.
     refusals = {
-        "no image": ([plan, outbase, "--mount", work], "--image IMAGE is required"),
         "a plan outside the mount": ([plan, outbase, "--image", "i", "--mount", "/elsewhere"], "is not under the volume mount"),
         "an OUTBASE outside the mount": ([plan, "/tmp/x", "--image", "i", "--mount", work], "OUTBASE /tmp/x is not under"),
         "a bad name": ([plan, outbase, "--image", "i", "--mount", work, "--name", "Shot_1"], "--name Shot_1"),
