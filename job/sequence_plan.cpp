@@ -72,9 +72,16 @@ Result<temporal::FrameDecision> decision_from_json(const json& j) {
   return d;
 }
 
-// FNV-1a 64 of the canonical text of what decides the frames.
-std::string fingerprint_of(const json& request, const json& track, const json& ranges) {
-  const std::string text = json{{"request", request}, {"track", track}, {"ranges", ranges}}.dump();
+// FNV-1a 64 of the canonical text of what decides the frames and where they are written:
+// the work dir as written (a relative one moves with the plan's folder) and the source with
+// them, so that an edited work_dir cannot send the shards elsewhere (issue 28.11).
+std::string fingerprint_of(const SequencePlan& plan, const json& track, const json& ranges) {
+  const std::string text = json{{"request", plan.request},
+                                {"track", track},
+                                {"ranges", ranges},
+                                {"work_dir", plan.work_dir.string()},
+                                {"source", to_string(plan.source)}}
+                               .dump();
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
   return fmt::format("{:016x}", h);
@@ -141,7 +148,7 @@ Result<SequencePlan> make_sequence_plan(const json& request, Source source, int 
     const int end = static_cast<int>(static_cast<long long>(i + 1) * plan.frames / shards);
     plan.ranges.emplace_back(first, end - first);
   }
-  plan.fingerprint = fingerprint_of(plan.request, track_json(plan.track), ranges_json(plan.ranges));
+  plan.fingerprint = fingerprint_of(plan, track_json(plan.track), ranges_json(plan.ranges));
   return plan;
 }
 
@@ -205,7 +212,7 @@ Result<SequencePlan> read_sequence_plan(const fs::path& plan_path) {
     next = first + count;
   }
   if (next != plan.frames) return plan_error(plan_path, "the ranges do not cover every frame");
-  if (plan.fingerprint != fingerprint_of(plan.request, track, ranges))
+  if (plan.fingerprint != fingerprint_of(plan, track, ranges))
     return plan_error(plan_path, "its fingerprint does not match its contents (edited after it was made?)");
   return plan;
 }

@@ -35,7 +35,7 @@ struct SequencePlan {
   nlohmann::json request;                           // the sequence request, paths absolute
   std::vector<temporal::FrameDecision> track;       // one decision per frame
   std::vector<std::pair<int, int>> ranges;          // per shard: first frame, frame count
-  std::string fingerprint;                          // of request, track and ranges
+  std::string fingerprint;                          // of request, track, ranges, work_dir and source
 
   std::filesystem::path resolved_work_dir() const;  // work_dir against the plan's folder
   nlohmann::json to_json() const;

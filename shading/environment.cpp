@@ -72,12 +72,22 @@ EnvironmentMap convert(const Image& img, const color::Mat3& m, double gain, std:
   return out;
 }
 
+constexpr int kMinEnvironmentRows = 4;
+
 Result<void> check_layout(const EnvironmentMap& m, const std::filesystem::path& path, std::vector<std::string>& warnings) {
+  // Two rules, each with its own message: a 4x2 map is 2:1 and was refused as if it were not.
   const double aspect = double(m.width) / m.height;
-  if (m.height < 4 || aspect < 1.5 || aspect > 2.5)
+  if (aspect < 1.5 || aspect > 2.5)
     return make_error("environment.layout",
-                      fmt::format("'{}' is {}x{}: an equirectangular environment map is twice as wide as high",
+                      fmt::format("'{}' is {}x{}: an equirectangular environment map is about twice as wide as high "
+                                  "(1.5 to 2.5 : 1)",
                                   path.filename().string(), m.width, m.height),
+                      "environment.file");
+  if (m.height < kMinEnvironmentRows)
+    return make_error("environment.layout",
+                      fmt::format("'{}' is {}x{}: an environment map needs at least {} rows ({}x{} or larger)",
+                                  path.filename().string(), m.width, m.height, kMinEnvironmentRows,
+                                  2 * kMinEnvironmentRows, kMinEnvironmentRows),
                       "environment.file");
   if (m.width != 2 * m.height)
     warnings.push_back(fmt::format("environment '{}' is {}x{}, not 2:1; mapped as equirectangular anyway",

@@ -171,6 +171,15 @@ TEST(SequencePlan, MergeRefusesMissingForeignAndEditedShards) {
   auto edited = read_sequence_plan(f.d / "edited.json");
   ASSERT_FALSE(edited.ok());
   EXPECT_NE(edited.error().message.find("fingerprint"), std::string::npos) << edited.error().message;
+  // ... its work dir too (issue 28.11: an edited work_dir wrote outside the plan's folder).
+  text = bytes_of(f.d / "plan.json");
+  const std::string work_dir = "\"work_dir\": " + json(plan->work_dir.string()).dump();
+  ASSERT_NE(text.find(work_dir), std::string::npos) << text.substr(0, 400);
+  text.replace(text.find(work_dir), work_dir.size(), "\"work_dir\": \"/tmp/elsewhere\"");
+  std::ofstream(f.d / "moved.json") << text;
+  auto moved = read_sequence_plan(f.d / "moved.json");
+  ASSERT_FALSE(moved.ok()) << "a plan whose work_dir was edited is read";
+  EXPECT_NE(moved.error().message.find("fingerprint"), std::string::npos) << moved.error().message;
   std::ofstream(f.d / "junk.json") << "{\"format\": \"hdrd-sequence-plan\", \"format_version\": 1, \"shards\": 0}";
   EXPECT_EQ(read_sequence_plan(f.d / "junk.json").error().code, "sequence.plan");
   EXPECT_EQ(run_sequence_shard(*plan, 2, {}).error().code, "request.value");

@@ -495,6 +495,13 @@ TEST(EnvironmentLoad, BadFilesAreClearErrors) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, "environment.layout");
   EXPECT_NE(r.error().message.find("twice as wide"), std::string::npos);
+  // Issue 28.11: a 4x2 map is 2:1; what it lacks is rows, and the message says so.
+  write_bytes(dir / "small.hdr", radiance_file("", "-Y 2 +X 4", std::vector<std::uint8_t>(32, 128)));
+  r = load_environment_map(dir / "small.hdr", w);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, "environment.layout");
+  EXPECT_EQ(r.error().message.find("twice as wide"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("at least 4 rows"), std::string::npos) << r.error().message;
   write_bytes(dir / "cut.hdr", radiance_file("", "-Y 4 +X 8", std::vector<std::uint8_t>(40, 128)));
   r = load_environment_map(dir / "cut.hdr", w);
   ASSERT_FALSE(r.ok());
