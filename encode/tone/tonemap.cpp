@@ -419,8 +419,8 @@ std::vector<ToneCurveInfo> builtins() {
   v.push_back({"spline", "libplacebo's default: a single-pivot polynomial spline in the PQ domain, the pivot from "
                          "the scene average (ST 2094-10-style knee), quadratic below it and cubic above",
                "libplacebo src/tone_mapping.c (pl_tone_map_spline, PL_TONE_MAP_CONSTANTS)",
-               {src_peak, src_avg, {"contrast", "spline contrast: 0 keeps the pivot's slope, higher flattens the "
-                                                "slope toward the knee line", 0, 1.5, 0.5},
+               {src_peak, src_avg, {"contrast", "slope at the pivot (d/s)^((1 - contrast) r) in PQ: 1 keeps the source's "
+                                                "contrast there (slope 1), 0 the least, above 1 more", 0, 1.5, 0.5},
                 knee_adapt, knee_def,
                 {"slope_tuning", "how fast the slope follows the peak ratio", 0, 10, 1.5},
                 {"slope_offset", "least exponent of the slope", 0, 1, 0.2}},
