@@ -32,12 +32,6 @@ std::optional<InputUnits> parse_input_units(std::string_view s) {
   if (s == "absolute") return InputUnits::absolute;
   return std::nullopt;
 }
-std::string_view to_string(GamutMapping g) { return g == GamutMapping::ictcp ? "ictcp" : "clip"; }
-std::optional<GamutMapping> parse_gamut_mapping(std::string_view s) {
-  if (s == "ictcp") return GamutMapping::ictcp;
-  if (s == "clip") return GamutMapping::clip;
-  return std::nullopt;
-}
 
 namespace detail {
 
@@ -61,33 +55,53 @@ bool in_cube(Vec3 c, double peak, double tol) {
 Vec3 clamp_to(Vec3 c, double peak) {
   return {std::clamp(c.x, 0.0, peak), std::clamp(c.y, 0.0, peak), std::clamp(c.z, 0.0, peak)};
 }
-
-// REFERENCE.md §1.5: constant-hue, constant-intensity desaturation in ICtCp toward the
-// achromatic axis until the colour fits [0, peak] in the container; intensity is capped at
-// the peak's (an achromatic colour there always fits).
-Vec3 desaturate_into_cube(Vec3 working_nits, const Mat3& to_c, double peak) {
-  const Vec3 ictcp = color::rec2020_nits_to_ictcp(
-      {std::max(working_nits.x, 0.0), std::max(working_nits.y, 0.0), std::max(working_nits.z, 0.0)});
-  const double i = std::min(ictcp.x, transfer::pq_inverse_eotf(peak));
-  auto at = [&](double s) { return to_c * color::ictcp_to_rec2020_nits({i, ictcp.y * s, ictcp.z * s}); };
-  double lo = 0, hi = 1;
-  if (in_cube(at(1.0), peak, 1e-6)) return clamp_to(at(1.0), peak);
-  for (int it = 0; it < 24; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (in_cube(at(mid), peak, 1e-6) ? lo : hi) = mid;
-  }
-  return clamp_to(at(lo), peak);
-}
 }  // namespace
 
-// scRGB is not mapped: its negatives carry wide colours.
-Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g) {
+// scRGB is not mapped: its negatives carry wide colours. The family's other maps
+// (gamut_map.hpp) run through their prepared mapper; HLG's volume then fits at constant
+// luminance as ictcp does.
+Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g, const gamut::Mapper* mapper) {
   const Mat3 to_c = working_to_container(t);
   const Vec3 c = to_c * working_nits;
   if (t.mode == Mode::scrgb) return c;
   const double peak = t.peak_nits;
+  if (mapper) return fit_volume(mapper->map(working_nits), t, GamutMapping::ictcp);
   if (in_cube(c, peak, kGamutTolerance) || g == GamutMapping::clip) return fit_volume(c, t, g);
-  return fit_volume(desaturate_into_cube(working_nits, to_c, peak), t, g);
+  return fit_volume(gamut::desaturate(working_nits, to_c, peak), t, g);
+}
+
+bool maps_every_pixel(const PreparedPipeline& p) { return p.gamut_mapper && !p.gamut_mapper->keeps_inside(); }
+
+namespace {
+// The input's gamut in the working space: its primaries, or the working space itself where
+// they reach beyond it (XYZ, ACES AP0: light outside Rec.2020 is clamped before the curve).
+Mat3 source_gamut(const Mat3& input_to_working) {
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k)
+      if (input_to_working.m[r][k] < -1e-6) return Mat3::identity();
+  return input_to_working;
+}
+}  // namespace
+
+std::shared_ptr<const gamut::Mapper> cached_gamut_mapper(GamutMapping g, const Mat3& input_to_working,
+                                                         const DisplayTarget& t) {
+  if (g == GamutMapping::ictcp || g == GamutMapping::clip || t.mode == Mode::scrgb) return nullptr;
+  static std::mutex mu;
+  static std::vector<std::pair<std::string, std::shared_ptr<const gamut::Mapper>>> cache;
+  const Mat3 src = source_gamut(input_to_working);
+  std::string key = fmt::format("{}|{:.17g}|{}", static_cast<int>(g), t.peak_nits, t.container().red.x);
+  for (const auto& row : src.m)
+    for (double v : row) key += fmt::format("|{:.17g}", v);
+  {
+    std::lock_guard lock(mu);
+    for (const auto& [k, v] : cache)
+      if (k == key) return v;
+  }
+  auto m = std::make_shared<const gamut::Mapper>(g, src, t.container(), t.peak_nits, kGamutTolerance);
+  std::lock_guard lock(mu);
+  if (cache.size() >= 8) cache.erase(cache.begin());
+  cache.emplace_back(key, m);
+  return m;
 }
 
 // HLG: inside the cube, E = k(Y_D) F_D with a scale k of the luminance alone
@@ -462,17 +476,31 @@ void set_exposure_scale(PreparedPipeline& p, double scale) {
   p.scene_scale = p.unit_nits * scale;
 }
 
-Result<void> set_source_peak(PreparedPipeline& p, double peak_relative) {
+std::string_view source_average_param(const tonemap::ToneCurveInfo& curve) {
+  for (const auto& p : curve.params)
+    if (p.name == "source_avg_nits") return p.name;
+  return {};
+}
+
+Result<void> set_source_peak(PreparedPipeline& p, std::optional<double> peak_relative,
+                             std::optional<double> average_relative) {
   if (!p.curve_info) return make_error("internal", "set_source_peak on a pipeline that is not prepared");
-  const std::string_view name = source_peak_param(*p.curve_info);
-  if (name.empty()) return {};
-  if (!std::isfinite(peak_relative) || peak_relative <= 0)
-    return make_error("tonemap.peak", fmt::format("source peak {} is not a positive number", peak_relative));
   const auto& t = p.settings.target;
-  double value = name == "source_peak_nits" ? peak_relative * t.paper_white_nits : peak_relative;
-  for (const auto& spec : p.curve_info->params)
-    if (spec.name == name) value = std::clamp(value, spec.min, spec.max);
-  p.params[std::string(name)] = value;
+  bool changed = false;
+  auto set = [&](std::string_view name, std::optional<double> relative, const char* what) -> Result<void> {
+    if (name.empty() || !relative) return {};
+    if (!std::isfinite(*relative) || *relative <= 0)
+      return make_error("tonemap.peak", fmt::format("source {} {} is not a positive number", what, *relative));
+    double value = name.ends_with("_nits") ? *relative * t.paper_white_nits : *relative;
+    for (const auto& spec : p.curve_info->params)
+      if (spec.name == name) value = std::clamp(value, spec.min, spec.max);
+    p.params[std::string(name)] = value;
+    changed = true;
+    return {};
+  };
+  if (auto ok = set(source_peak_param(*p.curve_info), peak_relative, "peak"); !ok) return ok;
+  if (auto ok = set(source_average_param(*p.curve_info), average_relative, "average"); !ok) return ok;
+  if (!changed) return {};
   const tonemap::Display display{t.peak_nits, t.black_nits, t.paper_white_nits};
   p.curve = p.curve_info->prepare(display, p.params);
   return {};
@@ -525,6 +553,7 @@ Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSett
   p.unit_nits = unit_nits;
   p.luminance_nits = std::move(samples);
   p.scene_scale = unit_nits * m->scale;
+  p.gamut_mapper = detail::cached_gamut_mapper(s.gamut, in.to_working, t);
   return p;
 }
 
@@ -584,7 +613,7 @@ Vec3 reference_display_nits(const PreparedPipeline& p, Vec3 input_rgb) {
     }
     if (g && g->placement() == grade::Placement::display) nits = apply_grade(nits);
   }
-  return detail::displayed_light(detail::gamut_map(nits, t, p.settings.gamut), t);
+  return detail::displayed_light(detail::gamut_map(nits, t, p.settings.gamut, p.gamut_mapper.get()), t);
 }
 
 Vec3 reference_signal(const DisplayTarget& t, Vec3 n) {

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "encode/colour/color.hpp"
+#include "encode/colour/gamut_map.hpp"  // GamutMapping (REFERENCE.md §1.5)
 #include "encode/display_target.hpp"
 #include "encode/tone/exposure.hpp"
 #include "encode/frame.hpp"
@@ -29,9 +30,6 @@ enum class InputUnits { relative, absolute };
 std::string_view to_string(InputUnits u);
 std::optional<InputUnits> parse_input_units(std::string_view s);
 
-enum class GamutMapping { ictcp, clip };  // REFERENCE.md §1.5
-std::string_view to_string(GamutMapping g);
-std::optional<GamutMapping> parse_gamut_mapping(std::string_view s);
 
 struct ToneSettings {
   std::string curve;                       // empty: the mode's default (tonemap::default_curve)
@@ -86,6 +84,9 @@ struct PreparedPipeline {
   // The metered samples (scene_luminance_nits) when the exposure mode read the image;
   // a sequence's temporal decisions reuse them.
   std::shared_ptr<const std::vector<float>> luminance_nits;
+  // The gamut map from the input's gamut into the container's, for every map but ictcp
+  // and clip (which need no tables); null for those and for scrgb.
+  std::shared_ptr<const gamut::Mapper> gamut_mapper;
   nlohmann::json describe() const;         // settings for the sidecar
 };
 
@@ -101,8 +102,13 @@ std::vector<float> scene_luminance_nits(const SceneInput& input, double unit_nit
 // a source peak for curves that take one (relative, 1.0 = diffuse white). The curve's
 // source-peak parameter (bt2390 source_peak_nits, lottes-hdr hdr_max, drago scene_max) is
 // set, clamped to its range, and the curve prepared again; curves without one are unchanged.
+// average_relative, when given, sets the scene average of curves that place a knee on it
+// (source_avg_nits: spline, st2094-40, st2094-10) the same way.
 void set_exposure_scale(PreparedPipeline& p, double scale);
-Result<void> set_source_peak(PreparedPipeline& p, double peak_relative);
+Result<void> set_source_peak(PreparedPipeline& p, std::optional<double> peak_relative,
+                             std::optional<double> average_relative = {});
+// The scene-average parameter of curves that take one ("source_avg_nits"), or empty.
+std::string_view source_average_param(const tonemap::ToneCurveInfo& curve);
 // The name of the curve's source-peak parameter, empty when it has none.
 std::string_view source_peak_param(const tonemap::ToneCurveInfo& curve);
 

@@ -179,6 +179,7 @@ struct FrameItem {
   double time_s = 0;
   temporal::FrameDecision decision;
   std::optional<double> source_peak_nits;  // when the curve took the detected peak
+  std::optional<double> source_avg_nits;   // when it took the scene average too
   double duration_s = 0;                   // the scene's animation (a render)
   std::string input;                       // an encode's EXR
   FrameResult result;
@@ -200,6 +201,7 @@ nlohmann::json frame_entry(const FrameItem& item, int scene) {
                           {"max_cll_nits", f.content_light.max_cll_nits},
                           {"frame_average_nits", f.content_light.max_fall_nits}};
   if (item.source_peak_nits) entry["source_peak_nits"] = *item.source_peak_nits;
+  if (item.source_avg_nits) entry["source_avg_nits"] = *item.source_avg_nits;
   if (!item.input.empty()) entry["input"] = item.input;
   return entry;
 }
@@ -614,10 +616,16 @@ Result<void> decide(const FrameLoop& loop, FrameItem& item, const SceneInput& in
   const auto mode = p.settings.exposure.mode;
   if (mode != exposure::Mode::manual && mode != exposure::Mode::camera) set_exposure_scale(p, d.exposure_scale);
   const std::string_view param = p.curve_info ? source_peak_param(*p.curve_info) : std::string_view();
-  if (loop.request.boolean("tone.dynamic_peak") && !param.empty() &&
-      !loop.request.at("tone.params").contains(std::string(param))) {
-    if (auto ok = set_source_peak(p, d.source_peak); !ok) return ok.error();
-    item.source_peak_nits = d.source_peak * p.settings.target.paper_white_nits;
+  if (loop.request.boolean("tone.dynamic_peak") && !param.empty()) {
+    // Each of the peak and the scene average follows the frames unless tone.params sets it.
+    const auto& given = loop.request.at("tone.params");
+    const std::string_view avg = source_average_param(*p.curve_info);
+    std::optional<double> peak, average;
+    if (!given.contains(std::string(param))) peak = d.source_peak;
+    if (!avg.empty() && !given.contains(std::string(avg)) && d.source_average > 0) average = d.source_average;
+    if (auto ok = set_source_peak(p, peak, average); !ok) return ok.error();
+    if (peak) item.source_peak_nits = *peak * p.settings.target.paper_white_nits;
+    if (average) item.source_avg_nits = *average * p.settings.target.paper_white_nits;
   }
   item.decision = d;
   if (loop.decided) {

@@ -53,7 +53,8 @@ json decision_json(const temporal::FrameDecision& d) {
           {"cut_distance_stops", d.cut_distance_stops},
           {"own_scale", d.own_scale},
           {"exposure_scale", d.exposure_scale},
-          {"source_peak", d.source_peak}};
+          {"source_peak", d.source_peak},
+          {"source_average", d.source_average}};
 }
 
 Result<temporal::FrameDecision> decision_from_json(const json& j) {
@@ -66,6 +67,12 @@ Result<temporal::FrameDecision> decision_from_json(const json& j) {
     if (it == j.end() || !it->is_number() || !std::isfinite(it->get<double>()))
       return make_error("sequence.plan", fmt::format("a track entry's {} is not a finite number", name));
     *field = it->get<double>();
+  }
+  // Plans written before the scene average was tracked have none: 0, "not measured".
+  if (const auto it = j.find("source_average"); it != j.end()) {
+    if (!it->is_number() || !std::isfinite(it->get<double>()) || it->get<double>() < 0)
+      return make_error("sequence.plan", "a track entry's source_average is not a finite number >= 0");
+    d.source_average = it->get<double>();
   }
   if (!(d.exposure_scale > 0) || !(d.own_scale > 0) || !(d.source_peak > 0))
     return make_error("sequence.plan", "a track entry's scales must be positive");

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "encode/colour/gamut_map.hpp"
 #include "encode/display_target.hpp"
 #include "job/outputs.hpp"
 
@@ -19,7 +20,7 @@ constexpr std::string_view kRanges[] = {"full", "narrow"};
 constexpr std::string_view kSdrCurves[] = {"srgb", "gamma22"};
 constexpr std::string_view kSdrEotfs[] = {"srgb", "gamma22", "bt1886"};
 constexpr std::string_view kApply[] = {"per-channel", "max-rgb", "luminance", "rgb"};
-constexpr std::string_view kGamut[] = {"ictcp", "clip"};
+constexpr const auto& kGamut = kGamutMappingNames;
 constexpr std::string_view kExposureModes[] = {"auto", "manual", "camera", "log-average", "histogram", "light"};
 constexpr std::string_view kBlend[] = {"linear", "srgb"};
 constexpr std::string_view kPlacement[] = {"scene", "display", "baked"};
@@ -104,7 +105,12 @@ std::vector<Setting> make_table() {
        .choices = kApply,
        .default_doc = "the curve's", .flag = "--tonemap-apply", .metavar = "HOW", .query = "apply"},
       {.path = "gamut", .type = T::choice, .sources = kSceneReferred,
-       .doc = "Gamut mapping after tone mapping: ictcp (constant hue) or clip", .choices = kGamut,
+       .doc = "Gamut mapping after tone mapping, from the input's gamut into the output's: ictcp (constant "
+              "intensity and hue, chroma reduced to the boundary; desaturate is the same), clip (per channel), "
+              "perceptual (soft knee toward the boundary), relative (hue-preserving clip toward the cusp), "
+              "absolute (relative without white adaptation), saturation, linear, darken, highlight (marks what "
+              "is outside): docs/encoding.md",
+       .choices = kGamut,
        .default_json = "\"ictcp\"", .flag = "--gamut", .metavar = "HOW", .query = "gamut"},
 
       // ---- exposure (REFERENCE.md §1.2, RTR4 §8.2.2) ----
@@ -162,7 +168,8 @@ std::vector<Setting> make_table() {
        .sequence = true},
       {.path = "tone.dynamic_peak", .type = T::boolean, .sources = kSceneReferred,
        .doc = "Sequences: a curve that takes a source peak (bt2390's source_peak_nits) follows the frames' smoothed "
-              "peak, unless tone.params sets it",
+              "peak, and one that takes a scene average (source_avg_nits: spline, st2094-40, st2094-10) the smoothed "
+              "mean luminance, unless tone.params sets them",
        .default_json = "true", .flag = "--no-dynamic-peak", .sequence = true},
       {.path = "tone.peak_percentile", .type = T::number, .sources = kSceneReferred,
        .doc = "Sequences: the luminance percentile taken as a frame's peak", .unit = "%", .min = 50, .max = 100,

@@ -35,6 +35,11 @@ if [ -f "$shared/fixtures/exr/Desk.exr" ]; then
 else
   echo "make-docs-pictures: $shared/fixtures/exr/Desk.exr missing: contact sheet and heatmap skipped" >&2
 fi
+if [ -f "$shared/fixtures/exr/WideColorGamut.exr" ]; then
+  # The gamut-mapping family side by side: a wide-gamut chromaticity sweep into Rec.709.
+  "$hdrd" contact-sheet "$shared/fixtures/exr/WideColorGamut.exr" -o "$img/gamut-maps-wide.png" --layout gamut-maps \
+    --tile-width 240 --columns 3 -q
+fi
 # Environment light: material-grid under its Preetham sky and under a studio EXR, SDR and
 # the heatmap of the HDR10 display luminance. bench_render_pictures renders them through
 # the library (it writes the studio map too); with `hdrd render --environment` wired, the

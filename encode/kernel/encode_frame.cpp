@@ -288,6 +288,8 @@ void stage_container(const FrameJob& job, int n, float* row) {
   const auto& t = job.p->settings.target;
   const float lo = detail::gamut_low(t), peak = detail::gamut_high(t);
   const bool map = t.mode != Mode::scrgb;
+  const gamut::Mapper* mapper = job.p->gamut_mapper.get();
+  const bool every = detail::maps_every_pixel(*job.p);
   for (int i = 0; i < n * 4; i += 4) {
     float r = row[i], g = row[i + 1], b = row[i + 2];
     if (!job.container_is_working) {
@@ -297,8 +299,8 @@ void stage_container(const FrameJob& job, int n, float* row) {
       const float cb = m[6] * r + m[7] * g + m[8] * b;
       r = cr, g = cg, b = cb;
     }
-    if (map && !(r >= lo && g >= lo && b >= lo && r <= peak && g <= peak && b <= peak)) {
-      const Vec3 c = detail::gamut_map({row[i], row[i + 1], row[i + 2]}, t, job.p->settings.gamut);
+    if (map && (every || !(r >= lo && g >= lo && b >= lo && r <= peak && g <= peak && b <= peak))) {
+      const Vec3 c = detail::gamut_map({row[i], row[i + 1], row[i + 2]}, t, job.p->settings.gamut, mapper);
       r = static_cast<float>(c.x), g = static_cast<float>(c.y), b = static_cast<float>(c.z);
     }
     row[i] = r, row[i + 1] = g, row[i + 2] = b;
@@ -526,7 +528,7 @@ void run_rows(const FrameJob& job, int y_begin, int y_end, ContentLightAccumulat
 std::optional<kernels::FusedRow> fused_template(const FrameJob& job) {
   const auto& p = *job.p;
   const auto& t = p.settings.target;
-  if (p.settings.grade || p.settings.dither || p.settings.staged_only) return std::nullopt;
+  if (p.settings.grade || p.settings.dither || p.settings.staged_only || detail::maps_every_pixel(p)) return std::nullopt;
   if (t.mode == Mode::hlg) return std::nullopt;
   kernels::FusedRow r;
   switch (job.tone->kind) {

@@ -159,6 +159,10 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   // saturated light (a sky-lit scene's warm highlights) differs by up to ~10 codes.
   if (t.container() != color::kRec2020 && t.mode != Mode::scrgb && s.gamut == GamutMapping::ictcp)
     return unsupported("gamut mapping into the Rec.709 container (gamut ictcp) runs on the CPU; gamut clip runs here");
+  // The family's other maps: this program only clips, so it runs them where nothing needs
+  // mapping (a Rec.2020 container whose map keeps colours inside as they are).
+  if (p.gamut_mapper && (detail::maps_every_pixel(p) || t.container() != color::kRec2020))
+    return unsupported(fmt::format("gamut mapping '{}' runs on the CPU; gamut clip runs here", to_string(s.gamut)));
   const auto sig_ptr = detail::cached_signal_stage(t);
   const detail::SignalStage& sig = *sig_ptr;
 
@@ -260,7 +264,7 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
   if (t.mode == Mode::hlg) {
     g += "  float yd = dot(kLuma, c);\n"
          "  float kk = yd > 0.0 ? pow(yd / hdrd_u.misc.y, (1.0 - hdrd_u.misc.z) / hdrd_u.misc.z) / hdrd_u.misc.y : 0.0;\n";
-    if (s.gamut == GamutMapping::ictcp)
+    if (s.gamut != GamutMapping::clip)
       // pipeline.cpp fit_volume: toward the grey of the same luminance, where kk is the same,
       // by the largest scale that keeps every channel's scene light at or below 1.
       g += fmt::format("  if (max(max(c.r, c.g), c.b) * kk > {}) {{\n"

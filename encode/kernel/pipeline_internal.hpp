@@ -116,7 +116,16 @@ bool in_volume(color::Vec3 container_nits, const DisplayTarget& t, double tolera
 // Working-space light (after tone mapping) -> container light inside the volume: what does
 // not fit is desaturated at constant ICtCp intensity toward the achromatic axis (REFERENCE.md
 // §1.5), or clipped with GamutMapping::clip; HLG colours then go through fit_volume.
-color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMapping g);
+color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMapping g,
+                      const gamut::Mapper* mapper = nullptr);
+// The prepared map of the family (gamut_map.hpp) from the input's gamut into the container
+// (cached: its tables take ~0.2 s), null for ictcp, clip and scrgb.
+std::shared_ptr<const gamut::Mapper> cached_gamut_mapper(GamutMapping g, const color::Mat3& input_to_working,
+                                                         const DisplayTarget& t);
+// A map that moves colours inside the container too (perceptual, saturation, linear, darken
+// from a source wider than the container): every pixel goes through it, none through the
+// fused kernel or the GPU program.
+bool maps_every_pixel(const PreparedPipeline& p);
 // Container light -> inside the volume, for light that is in the container's cube already
 // (or nearly: the UI composite): the cube clamp, and for hlg the largest scene-light scale
 // that fits, at constant luminance (ictcp) or the per-channel clip of E (clip).

@@ -1,5 +1,8 @@
 #include "encode/tone/temporal.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace hdrd::temporal {
 
 Result<void> validate(const TemporalSettings& s) {
@@ -30,6 +33,15 @@ Result<FrameDecision> TemporalTone::next_metered(std::span<const float> luminanc
   auto peak = peak_.next(histogram, d.exposure_scale, dt_s, d.scene_start);
   if (!peak) return peak.error();
   d.source_peak = *peak;
+  // The frame's mean luminance (NaN and Inf ignored, negatives as black), held above the
+  // histogram's black floor so the smoothing in stops stays finite on a black frame.
+  double sum = 0;
+  std::size_t n = 0;
+  for (float v : luminance_nits)
+    if (std::isfinite(v)) sum += std::max(v, 0.0f), ++n;
+  const double mean_nits = std::max(n ? sum / static_cast<double>(n) : 0.0, LuminanceHistogram::lower_edge(1));
+  if (d.scene_start) average_.reset();
+  d.source_average = average_.update(mean_nits * d.exposure_scale, dt_s);
   return d;
 }
 

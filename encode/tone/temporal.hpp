@@ -29,6 +29,10 @@ struct FrameDecision {
   double own_scale = 1;         // this frame's metering alone (exposure::meter)
   double exposure_scale = 1;    // what to expose it with (settings.exposure.scale)
   double source_peak = 1;       // the tone curve's source peak, relative (x paper white = nits)
+  // The scene's average light, relative: the mean luminance (linear, as HDR10+'s average
+  // maxRGB), smoothed as the peak is and reset with it; curves that place a knee on the
+  // average (spline, st2094-40, st2094-10: source_avg_nits) follow it.
+  double source_average = 0;
 };
 
 class TemporalTone {
@@ -50,6 +54,7 @@ class TemporalTone {
   SceneCutDetector cuts_;
   ExposureAdaptation adaptation_;
   PeakDetector peak_;
+  LogSmoother average_{settings_.peak.rise_time_s, settings_.peak.fall_time_s};
   bool first_ = true;
 };
 

@@ -56,6 +56,13 @@ using detail::Hable;
 
 double param(const ParamValues& p, const char* name) { return p.at(name); }
 
+detail::KneeParams knee_of(const ParamValues& p) {
+  detail::KneeParams k;
+  k.adaptation = param(p, "knee_adaptation");
+  k.default_knee = param(p, "knee_default");
+  return k;
+}
+
 // Strictly increasing curve on [0, W): invert by bisection in log space.
 std::optional<double> bisect_inverse(const Curve& c, double y, double max_y) {
   if (y <= 0) return 0.0;
@@ -397,6 +404,81 @@ std::vector<ToneCurveInfo> builtins() {
                  const detail::Bt2390 e(param(p, "source_black_nits"), param(p, "source_peak_nits"), d.black_nits,
                                         d.peak_nits, param(p, "black_lift") >= 0.5);
                  return std::make_unique<Bt2390Curve>(e, d);
+               }});
+  // libplacebo's ST 2094-10-style knee (tonemap_curves.hpp pick_knee): the scene average
+  // places it; sequences set source_peak_nits and source_avg_nits per frame (dynamic peak).
+  const ParamSpec src_peak{"source_peak_nits", "mastering (source) peak; light above it is the source peak", 100, 10000,
+                           1000};
+  const ParamSpec src_avg{"source_avg_nits", "scene average light (0: unknown, the knee sits at knee_default of the "
+                                             "source's PQ range)", 0, 10000, 0};
+  const ParamSpec knee_adapt{"knee_adaptation", "0: the display knee is the source knee (as far as it fits); 1: "
+                                                "the source knee's place in the source range, in the display's", 0, 1,
+                             0.4};
+  const ParamSpec knee_def{"knee_default", "knee as a fraction of the source's PQ range when the average is unknown",
+                           0.1, 0.8, 0.4};
+  v.push_back({"spline", "libplacebo's default: a single-pivot polynomial spline in the PQ domain, the pivot from "
+                         "the scene average (ST 2094-10-style knee), quadratic below it and cubic above",
+               "libplacebo src/tone_mapping.c (pl_tone_map_spline, PL_TONE_MAP_CONSTANTS)",
+               {src_peak, src_avg, {"contrast", "slope at the pivot (d/s)^((1 - contrast) r) in PQ: 1 keeps the source's "
+                                                "contrast there (slope 1), 0 the least, above 1 more", 0, 1.5, 0.5},
+                knee_adapt, knee_def,
+                {"slope_tuning", "how fast the slope follows the peak ratio", 0, 10, 1.5},
+                {"slope_offset", "least exponent of the slope", 0, 1, 0.2}},
+               Apply::max_rgb, true, true, false,
+               [](const Display& d, const ParamValues& p) {
+                 const double pw = d.paper_white_nits, lw = param(p, "source_peak_nits");
+                 auto c = std::make_shared<detail::Spline>(lw, param(p, "source_avg_nits"), d.peak_nits, knee_of(p),
+                                                           param(p, "contrast"), param(p, "slope_tuning"),
+                                                           param(p, "slope_offset"));
+                 return make(d.max_y(), [c, pw](double x) { return c->map_nits(x * pw) / pw; }, LambdaCurve::Fn{},
+                             std::vector<double>{lw / pw});
+               }});
+  v.push_back({"bt2446a", "ITU-R BT.2446 method A (HDR to SDR): the rho-based log curve on gamma-2.4 luma, its "
+                          "three-piece tone curve and the SDR display's inverse; applied as a ratio (max-rgb) it keeps "
+                          "chromaticity, which method A's chroma correction approximates in Y'CbCr",
+               "ITU-R BT.2446-1 (03/2021) method A",
+               {src_peak}, Apply::max_rgb, true, true, false,
+               [](const Display& d, const ParamValues& p) {
+                 const double pw = d.paper_white_nits;
+                 auto c = std::make_shared<detail::Bt2446a>(param(p, "source_peak_nits"), d.peak_nits);
+                 std::vector<double> kinks = c->kinks_nits();
+                 for (double& k : kinks) k /= pw;
+                 return make(d.max_y(), [c, pw](double x) { return c->map_nits(x * pw) / pw; }, LambdaCurve::Fn{},
+                             std::move(kinks));
+               }});
+  v.push_back({"st2094-40", "SMPTE ST 2094-40 (HDR10+) basis OOTF without metadata: linear below a knee from the "
+                            "scene average, an order-N Bezier above it with anchors derived from the target peak",
+               "SMPTE ST 2094-40 Annex B; knee and anchors as libplacebo derives them (src/tone_mapping.c st2094_40)",
+               {src_peak, src_avg, knee_adapt, knee_def},
+               Apply::max_rgb, true, true, false,
+               [](const Display& d, const ParamValues& p) {
+                 const double pw = d.paper_white_nits, lw = param(p, "source_peak_nits");
+                 auto c = std::make_shared<detail::St2094_40>(lw, param(p, "source_avg_nits"), d.peak_nits, knee_of(p));
+                 return make(d.max_y(), [c, pw](double x) { return c->map_nits(x * pw) / pw; }, LambdaCurve::Fn{},
+                             std::vector<double>{c->kx * lw / pw, lw / pw});
+               }});
+  v.push_back({"st2094-10", "SMPTE ST 2094-10 (Dolby Vision) tone curve (c1 + c2 x) / (1 + c3 x) through the "
+                            "source/display minimum, a knee from the scene average and the peaks",
+               "SMPTE ST 2094-10 Annex B (n = 1, in linear light as libplacebo evaluates it, src/tone_mapping.c)",
+               {src_peak, src_avg, knee_adapt, knee_def},
+               Apply::max_rgb, true, true, false,
+               [](const Display& d, const ParamValues& p) {
+                 const double pw = d.paper_white_nits, lw = param(p, "source_peak_nits");
+                 auto c = std::make_shared<detail::St2094_10>(lw, param(p, "source_avg_nits"), d.peak_nits, knee_of(p));
+                 return make(d.max_y(), [c, pw](double x) { return c->map_nits(x * pw) / pw; }, LambdaCurve::Fn{},
+                             std::vector<double>{lw / pw});
+               }});
+  v.push_back({"mobius", "Mobius (mpv, libplacebo): linear up to a knee in units of the display peak, then a Mobius "
+                         "transform that reaches the display peak at the source peak, C1 at the knee",
+               "libplacebo src/tone_mapping.c (pl_tone_map_mobius); mpv vo_opengl",
+               {src_peak, {"knee", "knee j as a fraction of the display peak (light below j x peak is kept)", 0, 0.99,
+                           0.3}},
+               Apply::max_rgb, true, true, false,
+               [](const Display& d, const ParamValues& p) {
+                 const double pw = d.paper_white_nits, lw = param(p, "source_peak_nits");
+                 auto c = std::make_shared<detail::Mobius>(lw, d.peak_nits, param(p, "knee"));
+                 return make(d.max_y(), [c, pw](double x) { return c->map_nits(x * pw) / pw; }, LambdaCurve::Fn{},
+                             std::vector<double>{lw / pw});
                }});
   v.push_back({"pbr-neutral", "Khronos PBR Neutral: keeps base colours up to a start of compression, then "
                               "desaturates highlights",

@@ -194,3 +194,150 @@ std::vector<double> Bt2390::lift_kinks_nits() const {
 }
 
 }  // namespace hdrd::tonemap::detail
+
+namespace hdrd::tonemap::detail {
+
+namespace {
+double mix(double a, double b, double t) { return a + (b - a) * t; }
+// GLSL smoothstep (edge0 > edge1 allowed: it then falls from 1 to 0).
+double smoothstep(double edge0, double edge1, double x) {
+  const double t = std::clamp((x - edge0) / (edge1 - edge0), 0.0, 1.0);
+  return t * t * (3 - 2 * t);
+}
+}  // namespace
+
+Knee pick_knee(double src_peak_nits, double src_avg_nits, double dst_peak_nits, const KneeParams& k) {
+  const double s_max = transfer::pq_inverse_eotf(src_peak_nits), d_max = transfer::pq_inverse_eotf(dst_peak_nits);
+  double s_knee = src_avg_nits > 0 ? transfer::pq_inverse_eotf(src_avg_nits) : k.default_knee * s_max;
+  s_knee = std::clamp(s_knee, k.minimum * s_max, k.maximum * s_max);
+  const double r = s_knee / s_max, adapted = r * d_max;
+  const double tuning = 1 - smoothstep(k.maximum, k.default_knee, r) * smoothstep(k.minimum, k.default_knee, r);
+  const double a = mix(k.adaptation, 1.0, tuning);
+  const double d_knee = std::clamp(mix(s_knee, adapted, a), k.minimum * d_max, k.maximum * d_max);
+  return {s_knee, d_knee};
+}
+
+Spline::Spline(double src_peak, double src_avg, double dst_peak, const KneeParams& k, double contrast,
+               double slope_tuning, double slope_offset)
+    : src_peak_nits(src_peak), dst_peak_nits(dst_peak) {
+  identity = !(src_peak > dst_peak);
+  if (identity) return;
+  knee = pick_knee(src_peak, src_avg, dst_peak, k);
+  const double sp = knee.src_pq, dp = knee.dst_pq;
+  const double s_max = transfer::pq_inverse_eotf(src_peak), d_max = transfer::pq_inverse_eotf(dst_peak);
+  const double ratio = std::clamp(slope_tuning * (src_peak / dst_peak - 1), slope_offset, 1 + slope_offset);
+  const double in_min = -sp, in_max = s_max - sp, out_min = -dp, out_max = d_max - dp;
+  slope = std::pow(dp / sp, (1 - contrast) * ratio);
+  slope = std::min({slope, 2 * dp / sp, 3 * out_max / in_max});
+  pa = (out_min - slope * in_min) / (in_min * in_min);
+  const double t = 2 * in_max * in_max;
+  qa = (slope * in_max - out_max) / (in_max * t);
+  qb = -3 * (slope * in_max - out_max) / t;
+}
+
+double Spline::map_nits(double nits) const {
+  if (!(nits > 0)) return 0.0;
+  if (identity) return std::min(nits, src_peak_nits);
+  if (nits >= src_peak_nits) return dst_peak_nits;
+  const double u = transfer::pq_inverse_eotf(nits) - knee.src_pq;
+  const double v = u > 0 ? ((qa * u + qb) * u + slope) * u : (pa * u + slope) * u;
+  return std::min(transfer::pq_eotf(std::max(v + knee.dst_pq, 0.0)), dst_peak_nits);
+}
+
+Mobius::Mobius(double src_peak, double dst_peak, double knee) : src_peak_nits(src_peak), dst_peak_nits(dst_peak), j(knee) {
+  identity = !(src_peak > dst_peak);
+  if (identity) return;
+  const double peak = src_peak / dst_peak;
+  a = -j * j * (peak - 1) / (j * j - 2 * j + peak);
+  b = (j * j - 2 * j * peak + peak) / (peak - 1);
+  scale = (b * b + 2 * b * j + j * j) / (b - a);
+}
+
+double Mobius::map_nits(double nits) const {
+  if (!(nits > 0)) return 0.0;
+  if (identity) return std::min(nits, src_peak_nits);
+  const double x = std::min(nits, src_peak_nits) / dst_peak_nits;
+  return std::min(x <= j ? x : scale * (x + a) / (x + b), 1.0) * dst_peak_nits;
+}
+
+Bt2446a::Bt2446a(double src_peak, double dst_peak)
+    : src_peak_nits(src_peak), dst_peak_nits(dst_peak),
+      rho_hdr(1 + 32 * std::pow(src_peak / 10000, 1 / 2.4)), rho_sdr(1 + 32 * std::pow(dst_peak / 10000, 1 / 2.4)) {}
+
+double Bt2446a::tone(double yp) {
+  if (yp <= kBt2446aJoin1) return 1.0770 * yp;
+  auto quadratic = [](double v) { return (-1.1510 * v + 2.7811) * v - 0.6302; };
+  if (yp < kBt2446aJoin2) return quadratic(yp);
+  const double step = 0.5 * kBt2446aJoin2 + 0.5 - quadratic(kBt2446aJoin2);
+  return 0.5 * yp + 0.5 - step * std::max(1 - yp, 0.0) / (1 - kBt2446aJoin2);
+}
+
+double Bt2446a::map_nits(double nits) const {
+  if (!(nits > 0)) return 0.0;
+  const double y = std::pow(std::min(nits, src_peak_nits) / src_peak_nits, 1 / 2.4);
+  const double yp = std::log(1 + (rho_hdr - 1) * y) / std::log(rho_hdr);
+  const double ysdr = (std::pow(rho_sdr, tone(yp)) - 1) / (rho_sdr - 1);
+  return std::min(std::pow(ysdr, 2.4), 1.0) * dst_peak_nits;
+}
+
+std::vector<double> Bt2446a::kinks_nits() const {
+  // Y'p = j: Y' = (rho^j - 1) / (rho - 1), light = L_HDR Y'^2.4.
+  std::vector<double> k;
+  for (double j : {kBt2446aJoin1, kBt2446aJoin2})
+    k.push_back(src_peak_nits * std::pow((std::pow(rho_hdr, j) - 1) / (rho_hdr - 1), 2.4));
+  k.push_back(src_peak_nits);
+  return k;
+}
+
+St2094_40::St2094_40(double src_peak, double src_avg, double dst_peak, const KneeParams& k)
+    : src_peak_nits(src_peak), dst_peak_nits(dst_peak) {
+  identity = !(src_peak > dst_peak);
+  if (identity) return;
+  const Knee knee = pick_knee(src_peak, src_avg, dst_peak, k);
+  kx = transfer::pq_eotf(knee.src_pq) / src_peak;
+  ky = transfer::pq_eotf(knee.dst_pq) / dst_peak;
+  const double m = ky / kx * (1 - kx) / (1 - ky);
+  const int n = std::clamp(static_cast<int>(std::ceil(m)), 2, 16);
+  anchors.assign(static_cast<std::size_t>(n) + 1, 1.0);
+  anchors[0] = 0;
+  anchors[1] = std::min(m / n, 1.0);
+}
+
+double St2094_40::map_nits(double nits) const {
+  if (!(nits > 0)) return 0.0;
+  if (identity) return std::min(nits, src_peak_nits);
+  const double x = std::min(nits / src_peak_nits, 1.0);
+  if (x <= kx) return x * ky / kx * dst_peak_nits;
+  const double t = (x - kx) / (1 - kx);
+  const int n = static_cast<int>(anchors.size()) - 1;
+  // Bernstein sum with running binomial coefficients.
+  double b = 0, binom = 1;
+  for (int i = 0; i <= n; ++i) {
+    b += binom * std::pow(t, i) * std::pow(1 - t, n - i) * anchors[static_cast<std::size_t>(i)];
+    binom = binom * (n - i) / (i + 1);
+  }
+  return std::min(ky + (1 - ky) * b, 1.0) * dst_peak_nits;
+}
+
+St2094_10::St2094_10(double src_peak, double src_avg, double dst_peak, const KneeParams& k)
+    : src_peak_nits(src_peak), dst_peak_nits(dst_peak) {
+  identity = !(src_peak > dst_peak);
+  if (identity) return;
+  const Knee knee = pick_knee(src_peak, src_avg, dst_peak, k);
+  const double x1 = 0, x2 = transfer::pq_eotf(knee.src_pq), x3 = src_peak;
+  const double y1 = 0, y2 = transfer::pq_eotf(knee.dst_pq), y3 = dst_peak;
+  // y_i (1 + c3 x_i) = c1 + c2 x_i for the three anchors, solved by Cramer's rule.
+  const double det = x3 * y3 * (x1 - x2) + x2 * y2 * (x3 - x1) + x1 * y1 * (x2 - x3);
+  c1 = (x2 * x3 * (y2 - y3) * y1 + x1 * x3 * (y3 - y1) * y2 + x1 * x2 * (y1 - y2) * y3) / det;
+  c2 = ((x3 * y3 - x2 * y2) * y1 + (x1 * y1 - x3 * y3) * y2 + (x2 * y2 - x1 * y1) * y3) / det;
+  c3 = ((x3 - x2) * y1 + (x1 - x3) * y2 + (x2 - x1) * y3) / det;
+}
+
+double St2094_10::map_nits(double nits) const {
+  if (!(nits > 0)) return 0.0;
+  if (identity) return std::min(nits, src_peak_nits);
+  const double x = std::min(nits, src_peak_nits);
+  return std::clamp((c1 + c2 * x) / (1 + c3 * x), 0.0, dst_peak_nits);
+}
+
+}  // namespace hdrd::tonemap::detail

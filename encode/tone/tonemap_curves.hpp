@@ -101,4 +101,99 @@ struct Bt2390 {
   double lift_reaches_peak_nits() const;  // the shape light whose lift is the display peak, or 0
 };
 
+
+// ---- Curves that compress a source (mastering) range [0, source peak] into the display's
+// [0, display peak], all in cd/m2. Light above the source peak is the source peak; where the
+// display peak is at or above the source peak there is nothing to compress and each is the
+// identity up to the source peak. None lifts black (every source and display minimum is 0).
+
+// The knee (pivot) of libplacebo's ST 2094-10-inspired brightness matching
+// (pl_tone_map_constants, src/tone_mapping.c st2094_pick_knee), in PQ signals s (source) and
+// d (display) with s_max = PQ(source peak), d_max = PQ(display peak):
+//   s_knee = PQ(scene average) (knee_default * s_max when the average is unknown), clamped to
+//            [knee_min, knee_max] * s_max;  r = s_knee / s_max;  adapted = r * d_max;
+//   tuning = 1 - smoothstep(knee_max, knee_default, r) * smoothstep(knee_min, knee_default, r);
+//   a = mix(knee_adaptation, 1, tuning);  d_knee = mix(s_knee, adapted, a) clamped to
+//            [knee_min, knee_max] * d_max.
+// knee_min = 0.1 and knee_max = 0.8 as libplacebo's defaults.
+struct KneeParams {
+  double adaptation = 0.4, minimum = 0.1, maximum = 0.8, default_knee = 0.4;
+};
+struct Knee {
+  double src_pq, dst_pq;  // the pivot, PQ signals
+};
+Knee pick_knee(double src_peak_nits, double src_avg_nits, double dst_peak_nits, const KneeParams& k);
+
+// libplacebo's default curve (src/tone_mapping.c "spline"), in the PQ domain with the pivot
+// (s_p, d_p) from pick_knee: slope m = d_p / s_p raised to (1 - contrast) * clamp(tuning *
+// (Lw / Ld - 1), offset, 1 + offset); below the pivot P(u) = Pa u^2 + m u with P(-s_p) = -d_p;
+// above it Q(u) = Qa u^3 + Qb u^2 + m u with Q(s_max - s_p) = d_max - d_p and Q'' = 0 there
+// (u = s - s_p). m is held at or below 2 d_p / s_p and 3 (d_max - d_p) / (s_max - s_p), the
+// slopes past which P or Q would turn back (libplacebo does not; its defaults stay below).
+struct Spline {
+  double src_peak_nits, dst_peak_nits;
+  Knee knee{};
+  double slope = 1, pa = 0, qa = 0, qb = 0;
+  bool identity = false;  // display peak >= source peak
+  Spline(double src_peak_nits, double src_avg_nits, double dst_peak_nits, const KneeParams& k, double contrast,
+         double slope_tuning, double slope_offset);
+  double map_nits(double nits) const;
+};
+
+// Mobius (mpv, libplacebo src/tone_mapping.c "mobius") in units of the display peak, with
+// p = Lw / Ld and knee j: x below j is kept, above it M(x) = scale (x + a) / (x + b) with
+// M(j) = j, M'(j) = 1, M(p) = 1.
+struct Mobius {
+  double src_peak_nits, dst_peak_nits, j, a = 0, b = 0, scale = 1;
+  bool identity = false;
+  Mobius(double src_peak_nits, double dst_peak_nits, double knee);
+  double map_nits(double nits) const;
+};
+
+// ITU-R BT.2446-1 method A (HDR to SDR, its tone-mapping steps) on luma, in linear
+// light: Y' = (Y / L_HDR)^(1/2.4); rho_HDR = 1 + 32 (L_HDR / 10000)^(1/2.4);
+// Y'p = log(1 + (rho_HDR - 1) Y') / log(rho_HDR); Y'c = 1.0770 Y'p (Y'p <= 0.7399),
+// -1.1510 Y'p^2 + 2.7811 Y'p - 0.6302 (< 0.9909), 0.5 Y'p + 0.5 above;
+// Y'sdr = (rho_SDR^Y'c - 1) / (rho_SDR - 1); Y = L_SDR Y'sdr^2.4 (BT.1886, black 0).
+// The published pieces, rounded to four digits, do not quite meet: at 0.7399 the quadratic
+// starts 5.5e-4 above the line (a step up, which a table cannot follow). Here the line
+// hands over where the quadratic crosses it, Y'p = 0.718480 (a slope kink, 1.077 to
+// 1.127, no step): over [0.71848, 0.7399] Y'c is the quadratic, at most 5.5e-4 above the
+// published line. At 0.9909 the line starts 5.1e-6 above the quadratic's end: the line
+// bends in by that much at 0.9909, falling linearly to nothing at Y'p = 1 (the peak is
+// still the peak), so the curve has no step there either.
+inline constexpr double kBt2446aJoin1 = 0.7184796505224301, kBt2446aJoin2 = 0.9909;
+struct Bt2446a {
+  double src_peak_nits, dst_peak_nits, rho_hdr, rho_sdr;
+  Bt2446a(double src_peak_nits, double dst_peak_nits);
+  static double tone(double yp);  // Y'p -> Y'c
+  double map_nits(double nits) const;
+  std::vector<double> kinks_nits() const;  // the pieces' joins and the source peak
+};
+
+// SMPTE ST 2094-40 Annex B basis OOTF without metadata, as libplacebo builds it from the
+// target peak (src/tone_mapping.c st2094_40): x = L / Lw, knee Kx = knee_src / Lw,
+// Ky = knee_dst / Ld (pick_knee, in linear light); y = (Ky / Kx) x below Kx, above it
+// y = Ky + (1 - Ky) B_N((x - Kx) / (1 - Kx)), B_N(t) = sum_k C(N, k) t^k (1 - t)^(N - k) P_k
+// with P_0 = 0, P_1 = min(m / N, 1), P_2..P_N = 1, m = Ky / Kx (1 - Kx) / (1 - Ky) and
+// N = clamp(ceil(m), 2, 16): C1 at the knee. Output L = y Ld.
+struct St2094_40 {
+  double src_peak_nits, dst_peak_nits, kx = 0, ky = 0;
+  std::vector<double> anchors;  // P_0 .. P_N
+  bool identity = false;
+  St2094_40(double src_peak_nits, double src_avg_nits, double dst_peak_nits, const KneeParams& k);
+  double map_nits(double nits) const;
+};
+
+// SMPTE ST 2094-10 Annex B tone curve y = (c1 + c2 x^n) / (1 + c3 x^n) with n = 1 through
+// three anchors (x1, y1) = (0, 0) (source and display minimum), (x2, y2) = the knee from the
+// scene average (pick_knee) and (x3, y3) = (Lw, Ld), in linear cd/m2 as libplacebo
+// evaluates it (src/tone_mapping.c st2094_10).
+struct St2094_10 {
+  double src_peak_nits, dst_peak_nits, c1 = 0, c2 = 1, c3 = 0;
+  bool identity = false;
+  St2094_10(double src_peak_nits, double src_avg_nits, double dst_peak_nits, const KneeParams& k);
+  double map_nits(double nits) const;
+};
+
 }  // namespace hdrd::tonemap::detail

@@ -238,6 +238,101 @@ INSTANTIATE_TEST_SUITE_P(Modes, FastVsReference,
                            return n;
                          });
 
+// The gamut-mapping family through the whole encoder (issue 31): Rec.2020 input into each
+// mode's container, the fast path (which leaves colours inside to the kernel and sends the
+// rest, or with perceptual/saturation/linear/darken everything, to the map) against the
+// double reference, within one code.
+struct GamutCase {
+  Mode mode;
+  GamutMapping gamut;
+};
+void PrintTo(const GamutCase& c, std::ostream* os) { *os << to_string(c.mode) << " " << to_string(c.gamut); }
+class GamutFastVsReference : public ::testing::TestWithParam<GamutCase> {};
+
+TEST_P(GamutFastVsReference, WithinOneCode) {
+  const auto [mode, gamut] = GetParam();
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> lg(-3, 1.5);
+  Image img(96, 32);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    for (int c = 0; c < 3; ++c) img.rgba[i * 4 + c] = static_cast<float>(std::pow(10.0, lg(rng)) * (rng() % 4 == 0 ? 0 : 1));
+    img.rgba[i * 4 + 3] = 1;
+  }
+  auto s = settings(mode, "pq-shoulder");
+  s.gamut = gamut;
+  SceneInput in;
+  in.image = &img;
+  in.to_working = color::Mat3::identity();  // Rec.2020 input: wider than an SDR container
+  auto prepared = prepare_pipeline(in, s);
+  ASSERT_TRUE(prepared.ok());
+  EXPECT_EQ(prepared->gamut_mapper != nullptr, gamut != GamutMapping::ictcp && gamut != GamutMapping::clip);
+  auto f = encode_prepared(in, *prepared);
+  ASSERT_TRUE(f.ok());
+  const auto sig = detail::build_signal_stage(s.target);
+  int worst = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float* p = img.px(x, y);
+      const Vec3 e = reference_signal(s.target, reference_display_nits(*prepared, {p[0], p[1], p[2]}));
+      const auto got = codes_at(*f, x, y);
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, std::abs(got[c] - static_cast<int>(std::clamp(e[c], 0.0, 1.0) * sig.code_scale + 0.5)));
+    }
+  EXPECT_LE(worst, 1);
+}
+
+std::vector<GamutCase> gamut_cases() {
+  std::vector<GamutCase> v;
+  for (Mode m : {Mode::sdr, Mode::hdr10, Mode::hlg})
+    for (std::string_view n : kGamutMappingNames)
+      if (n != "desaturate") v.push_back({m, *parse_gamut_mapping(n)});
+  return v;
+}
+
+INSTANTIATE_TEST_SUITE_P(Maps, GamutFastVsReference, ::testing::ValuesIn(gamut_cases()), [](const auto& i) {
+  return std::string(to_string(i.param.mode)) + "_" + std::string(to_string(i.param.gamut));
+});
+
+TEST(Encode, GamutMapsOfASourceThatFitsChangeNothing) {
+  // Rec.709 input into the Rec.709 SDR container: nothing to compress, every map is ictcp.
+  Image img(3, 1);
+  img.rgba = {0.9f, 0.1f, 0.05f, 1, 0.2f, 0.7f, 0.1f, 1, 0.05f, 0.1f, 0.8f, 1};
+  auto s = settings(Mode::sdr, "pq-shoulder");
+  const auto want = encode(img, s);
+  for (GamutMapping g : {GamutMapping::perceptual, GamutMapping::saturation, GamutMapping::linear, GamutMapping::darken,
+                         GamutMapping::relative}) {
+    s.gamut = g;
+    const auto got = encode(img, s);
+    for (int x = 0; x < 3; ++x) EXPECT_EQ(codes_at(got, x, 0), codes_at(want, x, 0)) << to_string(g) << " " << x;
+  }
+}
+
+// A sequence's per-frame statistics reach the curves that take them: the peak on every
+// curve with a source peak, the scene average on those with a knee on it (source_avg_nits).
+TEST(Encode, SourcePeakAndAverageReachTheCurve) {
+  const Image img = solid(1, 1, {1, 1, 1});
+  SceneInput in;
+  in.image = &img;
+  for (const char* curve : {"st2094-40", "st2094-10", "spline", "bt2390"}) {
+    auto s = settings(Mode::sdr, curve);
+    auto p = prepare_pipeline(in, s);
+    ASSERT_TRUE(p.ok());
+    ASSERT_TRUE(set_source_peak(*p, 12.0, 0.4).ok());
+    EXPECT_DOUBLE_EQ(p->params.at("source_peak_nits"), 1200) << curve;  // SDR paper white = 100
+    const bool has_avg = std::string(curve) != "bt2390";
+    EXPECT_EQ(p->params.count("source_avg_nits"), has_avg ? 1u : 0u) << curve;
+    if (!has_avg) continue;
+    EXPECT_DOUBLE_EQ(p->params.at("source_avg_nits"), 40) << curve;
+    auto fresh = tonemap::prepare(curve, {100, s.target.black_nits, 100}, {{"source_peak_nits", 1200}, {"source_avg_nits", 40}});
+    ASSERT_TRUE(fresh.ok());
+    for (double x : {0.05, 0.4, 2.0, 9.0}) EXPECT_DOUBLE_EQ(p->curve->map(x), (*fresh)->map(x)) << curve << " " << x;
+    // Only the average: the peak stays what it was.
+    ASSERT_TRUE(set_source_peak(*p, std::nullopt, 0.1).ok());
+    EXPECT_DOUBLE_EQ(p->params.at("source_peak_nits"), 1200);
+    EXPECT_DOUBLE_EQ(p->params.at("source_avg_nits"), 10);
+  }
+}
+
 TEST(Encode, UiWhiteLandsAtUiWhiteNits) {
   auto overlay = std::make_shared<OverlayImage>();
   overlay->width = 2;

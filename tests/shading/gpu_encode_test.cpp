@@ -108,7 +108,11 @@ INSTANTIATE_TEST_SUITE_P(Modes, GpuEncode,
                          ::testing::Values(Case{"material-grid", Mode::hdr10, 10, ""}, Case{"hdr", Mode::hdr10, 10, ""},
                                            Case{"hdr", Mode::hdr10, 10, "clip"}, Case{"material-grid", Mode::hdr10, 10, "bt2390"}, Case{"hdr", Mode::hlg, 10, ""},
                                            Case{"material-grid", Mode::sdr, 8, ""}, Case{"hdr", Mode::sdr, 10, "hable"},
-                                           Case{"underwater", Mode::sdr_bt1886, 8, ""}, Case{"hdr", Mode::scrgb, 16, ""}),
+                                           Case{"underwater", Mode::sdr_bt1886, 8, ""}, Case{"hdr", Mode::scrgb, 16, ""},
+                                           // The curves users compare (issue 31): tables on the GPU too.
+                                           Case{"hdr", Mode::hdr10, 10, "spline"}, Case{"hdr", Mode::hdr10, 10, "st2094-40"},
+                                           Case{"material-grid", Mode::hdr10, 10, "st2094-10"},
+                                           Case{"hdr", Mode::sdr, 8, "bt2446a"}, Case{"hdr", Mode::sdr, 10, "mobius"}),
                          case_name);
 
 // Issue 29 item 2 on the GPU path, end to end on llvmpipe: at sampled peaks (every 499th

@@ -1,5 +1,6 @@
-// hdrd contact-sheet INPUT.exr -o sheet.png: one image through every tone curve as an SDR
-// preview, labelled, side by side (as RTR4 fig. 8.15 compares four tone mappers).
+// hdrd contact-sheet INPUT.exr -o sheet.png: one image through every tone curve (or, with
+// --layout gamut-maps, every gamut map) as an SDR preview, labelled, side by side (as RTR4
+// fig. 8.15 compares four tone mappers).
 #include <filesystem>
 
 #include "encode/io/io.hpp"
@@ -19,6 +20,7 @@ struct SheetOptions {
   std::string input, output;
   int tile_width = 320;
   int columns = 4;
+  std::string layout = "curves";  // or "gamut-maps"
 };
 
 void run(const SheetOptions& o) {
@@ -44,7 +46,9 @@ void run(const SheetOptions& o) {
   if (!settings) throw HdrdError(settings.error());
   settings->exposure.mode = job::exposure_mode(*request, request->has("exposure.illuminance_lux"));
   const EncodeSettings base = *settings;
-  if (request->has("tone.curve")) notes.push_back("--tonemap is ignored: the sheet shows every curve");
+  const bool gamut_maps = o.layout == "gamut-maps";
+  if (!gamut_maps && request->has("tone.curve")) notes.push_back("--tonemap is ignored: the sheet shows every curve");
+  if (gamut_maps && request->has("gamut")) notes.push_back("--gamut is ignored: the sheet shows every gamut map");
   auto exr = io::read_exr(o.input);
   if (!exr) throw HdrdError(exr.error());
   const Image small = patterns::downscale(exr->image, o.tile_width);
@@ -54,19 +58,32 @@ void run(const SheetOptions& o) {
   in.units = exr->white_luminance ? InputUnits::absolute : InputUnits::relative;
   in.white_luminance_nits = exr->white_luminance.value_or(1.0);
 
+  // One tile per curve, or per gamut map (the alias "desaturate" is ictcp's tile).
+  std::vector<std::pair<std::string, EncodeSettings>> runs;
+  if (gamut_maps) {
+    for (std::string_view name : kGamutMappingNames) {
+      const auto g = parse_gamut_mapping(name);
+      if (!g || to_string(*g) != name) continue;
+      runs.emplace_back(std::string(name), base);
+      runs.back().second.gamut = *g;
+    }
+  } else {
+    for (const auto& info : tonemap::curves()) {
+      runs.emplace_back(std::string(info.name), base);
+      runs.back().second.tone.curve = std::string(info.name);
+    }
+  }
   std::vector<EncodedFrame> frames;
   std::vector<patterns::SheetTile> tiles;
-  frames.reserve(tonemap::curves().size());
-  for (const auto& info : tonemap::curves()) {
-    EncodeSettings s = base;
-    s.tone.curve = std::string(info.name);
+  frames.reserve(runs.size());
+  for (const auto& [label, s] : runs) {
     auto f = encode_frame(in, s);
     if (f) {
       frames.push_back(std::move(*f));
-      tiles.push_back({std::string(info.name), nullptr, {}});
+      tiles.push_back({label, nullptr, {}});
     } else {
-      tiles.push_back({std::string(info.name), nullptr, f.error().message});
-      notes.push_back(std::string(info.name) + ": " + f.error().message);
+      tiles.push_back({label, nullptr, f.error().message});
+      notes.push_back(label + ": " + f.error().message);
     }
   }
   for (std::size_t i = 0, k = 0; i < tiles.size(); ++i)
@@ -76,9 +93,11 @@ void run(const SheetOptions& o) {
   auto png = patterns::contact_sheet(tiles, title, o.columns).png();
   if (!png) throw HdrdError(png.error());
   if (auto ok = io::atomic_write(o.output, *png); !ok) throw HdrdError(ok.error());
-  nlohmann::json j = {{"output", o.output}, {"curves", nlohmann::json::array()}, {"notes", notes}};
-  for (const auto& t : tiles) j["curves"].push_back(t.label);
-  print_out(o.common.json ? j.dump(2) : fmt::format("wrote {} ({} curves)\n", o.output, tiles.size()));
+  const char* what = gamut_maps ? "gamut_maps" : "curves";
+  nlohmann::json j = {{"output", o.output}, {what, nlohmann::json::array()}, {"notes", notes}};
+  for (const auto& t : tiles) j[what].push_back(t.label);
+  print_out(o.common.json ? j.dump(2)
+                          : fmt::format("wrote {} ({} {})\n", o.output, tiles.size(), gamut_maps ? "gamut maps" : "curves"));
 }
 
 void setup(CLI::App& root) {
@@ -88,12 +107,16 @@ void setup(CLI::App& root) {
   app->add_option("-o,--output", o->output, "Output PNG")->required();
   app->add_option("--tile-width", o->tile_width, "Width of each tile (default 320)");
   app->add_option("--columns", o->columns, "Tiles per row (default 4)");
+  app->add_option("--layout", o->layout, "curves: one tile per tone curve (default); gamut-maps: one per gamut map, "
+                                         "with the request's curve")
+      ->check(CLI::IsMember({"curves", "gamut-maps"}));
   add_setting_options(*app, job::Source::encode, job::Reach::cli, o->args);
   add_common_options(*app, o->common);
   app->footer(
       "Examples:\n"
       "  hdrd contact-sheet Desk.exr -o desk-sheet.png\n"
       "  hdrd contact-sheet Desk.exr -o sheet.png --exposure -1 --tile-width 240 --columns 5\n"
+      "  hdrd contact-sheet Wide.exr -o gamut-sheet.png --layout gamut-maps --tonemap bt2390\n"
       "The default mode here is sdr (an sRGB preview); exposure options apply to every tile.");
   app->callback([o] { run(*o); });
 }

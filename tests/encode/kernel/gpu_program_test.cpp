@@ -77,6 +77,28 @@ TEST(GpuProgram, SdrIctcpGamutMappingStaysOnTheCpu) {
   EXPECT_NE(prog.unsupported_reason.find("gamut"), std::string::npos) << prog.unsupported_reason;
 }
 
+// The gamut-mapping family: this program only clips, so it takes a map only where nothing
+// needs mapping (the Rec.2020 container of hdr10/hlg, from an input that fits); into an SDR
+// container the map runs on the CPU and says so. The new curves are tables: they run here.
+TEST(GpuProgram, GamutMapsRunWhereNothingNeedsMapping) {
+  Image img(2, 2);
+  for (std::string_view n : kGamutMappingNames) {
+    const GamutMapping g = *parse_gamut_mapping(n);
+    if (g == GamutMapping::ictcp || g == GamutMapping::clip) continue;
+    const auto sdr = gpu::make_encode_program(prepare(Mode::sdr, "pq-shoulder", img, {}, g));
+    EXPECT_FALSE(sdr.supported) << n;
+    EXPECT_NE(sdr.unsupported_reason.find(fmt::format("gamut mapping '{}'", n)), std::string::npos) << sdr.unsupported_reason;
+    for (Mode m : {Mode::hdr10, Mode::hlg}) {
+      const auto hdr = gpu::make_encode_program(prepare(m, "pq-shoulder", img, {}, g));
+      EXPECT_TRUE(hdr.supported) << n << " " << to_string(m) << ": " << hdr.unsupported_reason;
+    }
+  }
+  for (const char* c : {"spline", "bt2446a", "st2094-40", "st2094-10", "mobius"}) {
+    const auto prog = gpu::make_encode_program(prepare(Mode::hdr10, c, img));
+    EXPECT_TRUE(prog.supported) << c << ": " << prog.unsupported_reason;
+  }
+}
+
 TEST(GpuProgram, RgbOperatorsAndGradesStayOnTheCpu) {
   Image img(2, 2);
   for (const char* c : {"agx", "pbr-neutral", "ictcp"}) {

@@ -329,4 +329,34 @@ TEST(TemporalTone, GivenCutsAloneWhenDetectionIsOff) {
   EXPECT_TRUE(tone.next(b.frame(0, 64), e, 203, 0.04, true)->scene_start);
 }
 
+
+// The scene average (curves with a knee on it: spline, st2094-40, st2094-10): the mean of the
+// frame's luminance times its exposure, smoothed in stops with the peak's time constants and
+// taken as it is on the first frame of a scene.
+TEST(TemporalTone, SceneAverageIsTheSmoothedExposedMean) {
+  exposure::Settings e;  // manual: the scale exposure::meter gives
+  TemporalSettings t;
+  t.detect_cuts = false;
+  TemporalTone tone(t);
+  const double scale = exposure::meter(e, {}, 203)->scale;
+  auto mean = [](const std::vector<float>& v) {
+    double s = 0;
+    for (float x : v) s += x;
+    return s / static_cast<double>(v.size());
+  };
+  const std::vector<float> dim(1000, 20.0f), bright(1000, 320.0f);  // four stops apart
+  const auto first = *tone.next(dim, e, 203, 1.0 / 24);
+  EXPECT_NEAR(first.source_average, mean(dim) * scale, 1e-12 * mean(dim) * scale);
+  // A step up of four stops approaches with the rise time (0.25 s): after 0.25 s, 1 - 1/e of it.
+  double got = 0;
+  for (int i = 0; i < 6; ++i) got = tone.next(bright, e, 203, 1.0 / 24)->source_average;
+  const double want_stops = 4 * (1 - std::exp(-0.25 / 0.25));
+  EXPECT_NEAR(std::log2(got / (mean(dim) * scale)), want_stops, 1e-9);
+  // A cut takes the new scene's mean as it is.
+  const auto cut = *tone.next(dim, e, 203, 1.0 / 24, true);
+  EXPECT_NEAR(cut.source_average, mean(dim) * scale, 1e-12 * mean(dim) * scale);
+  // A black frame stays finite and positive.
+  EXPECT_GT(tone.next(std::vector<float>(10, 0.0f), e, 203, 1.0 / 24, true)->source_average, 0.0);
+}
+
 }  // namespace
