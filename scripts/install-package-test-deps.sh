@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Installs what packaging and its tests (tests/package, docs/packaging.md) need and the
 # build does not: debhelper (scripts/make-deb.sh), lintian, debootstrap (the Debian 12 test
-# root), groff and man-db (the man page check), jq, and podman for scripts/make-image.sh.
+# root), groff-base and man-db (the man page check) and podman for scripts/make-image.sh.
 # Test-only: scripts/install-deps.sh does not install these. Debian 12 packages; needs root
 # (or sudo); installs only what is missing.
 set -euo pipefail
-packages=(debhelper lintian debootstrap groff man-db jq podman)
+packages=(debhelper lintian debootstrap groff-base man-db podman)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")

@@ -13,7 +13,7 @@ docs=$build/generated-docs
 hdrd=$build/tools/hdrd
 hdrctl=$build/tools/hdrctl/hdrctl
 fail() { echo "FAIL: $*" >&2; exit 1; }
-command -v jq >/dev/null || { echo "SKIP: jq is missing (scripts/install-package-test-deps.sh)" >&2; exit 77; }
+command -v python3 >/dev/null || { echo "SKIP: python3 is missing (it reads the JSON)" >&2; exit 77; }
 command -v groff >/dev/null || { echo "SKIP: groff is missing (scripts/install-package-test-deps.sh)" >&2; exit 77; }
 
 for page in hdrd.1 hdrctl.1 hdrd.toml.5; do
@@ -45,12 +45,16 @@ while IFS=$'\t' read -r flag reach sources; do
       [[ $got == *" $flag "* ]] || { echo "hdrd's completion of '$s' lacks $flag" >&2; missing=1; }
     fi
   done
-done < <(jq -r '.[] | select(.cli) | [.cli, (.reach // "everywhere"), (.applies_to | join(" "))] | @tsv' <<<"$settings")
+done < <(python3 -c 'import json, sys
+for s in json.load(sys.stdin):
+    if s.get("cli"): print(s["cli"], s.get("reach", "everywhere"), " ".join(s["applies_to"]), sep="\t")' <<<"$settings")
 while read -r key; do
   section=${key%%.*} name=${key#*.}
   grep -qF "\\fB$(printf '%s' "$name" | sed 's/-/\\-/g') = " "$docs/hdrd.toml.5" || { echo "hdrd.toml.5 lacks $key" >&2; missing=1; }
   grep -qF ".SS \"[$section]\"" "$docs/hdrd.toml.5" || { echo "hdrd.toml.5 lacks [$section]" >&2; missing=1; }
-done < <(jq -r 'del(.source) | to_entries[] | .key as $s | .value | keys[] | "\($s).\(.)"' <<<"$config")
+done < <(python3 -c 'import json, sys
+for section, keys in json.load(sys.stdin).items():
+    if isinstance(keys, dict): print("\n".join(section + "." + k for k in keys))' <<<"$config")
 [ "$missing" -eq 0 ] || fail "a setting or configuration key is missing from the generated pages"
 
 for c in hdrd hdrctl; do bash -n "$docs/$c.bash" || fail "bash -n $c.bash"; done
@@ -60,7 +64,8 @@ complete_words() {
   bash -c '. "$1"; fn=$2; shift 2; COMP_WORDS=("$@"); COMP_CWORD=$(( $# - 1 )); COMP_LINE="$*"; "$fn"; printf "%s\n" "${COMPREPLY[@]}"' \
     _ "$script" "$fn" "$@" | sort
 }
-modes=$(jq -r '.[] | select(.path == "display.mode") | .choices[]' <<<"$settings" | sort)
+modes=$(python3 -c 'import json, sys
+print("\n".join(c for s in json.load(sys.stdin) if s["path"] == "display.mode" for c in s["choices"]))' <<<"$settings" | sort)
 [ -n "$modes" ] || fail "no display.mode choices in hdrd settings --json"
 got=$(complete_words "$docs/hdrd.bash" _hdrd hdrd render --mode '')
 [ "$got" = "$modes" ] || fail "hdrd render --mode <TAB> gave [$got], not the modes [$modes]"
