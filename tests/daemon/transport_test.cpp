@@ -117,7 +117,10 @@ TEST(WireError, StatusPerCode) {
       {"server.busy", 503},          {"queue.memory", 503},          {"request.memory", 400},
       {"request.depth", 400},
       // a missing FFmpeg on the daemon's machine is the daemon's fault; what a codec cannot do is the request's
-      {"video.libav", 500},          {"video.codec", 422}};
+      {"video.libav", 500},          {"video.codec", 422},
+      // issue 28.9: a malformed Radiance map is the request's, as a malformed EXR is
+      {"hdr.size", 422},             {"hdr.rle", 422},               {"hdr.truncated", 422},
+      {"hdr.resolution", 422},       {"hdr.file", 422},              {"hdr_metadata.x", 422}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);
