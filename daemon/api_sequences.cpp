@@ -108,7 +108,7 @@ void Service::post_sequences(HttpRequest& http, std::shared_ptr<Responder> respo
       return responder->reply(Reply::error(ok.error()));
   constexpr std::size_t kQueueDepth = 2;  // job::SequenceOptions::queue_depth
   auto memory = estimate_sequence_memory(*request, plan->inputs.empty() ? std::filesystem::path() : plan->inputs.front(),
-                                         kQueueDepth, http.body.size(), cfg->limits);
+                                         kQueueDepth, http.body.size(), cfg->limits, plan->frames);
   if (!memory) return responder->reply(Reply::error(memory.error()));
 
   SequenceSpec spec;
@@ -141,7 +141,8 @@ void Service::get_jobs(HttpRequest&, std::shared_ptr<Responder> responder) {
                                {"queued", s.queued},
                                {"running", s.running},
                                {"finished", s.finished},
-                               {"memory_in_flight_bytes", s.memory_in_flight_bytes}}));
+                               {"memory_in_flight_bytes", s.memory_in_flight_bytes},
+                               {"memory_kept_bytes", s.memory_kept_bytes}}));
 }
 
 // GET /v1/jobs/{id}, /v1/jobs/{id}/result, /v1/jobs/{id}/sidecar.
