@@ -248,7 +248,7 @@ nlohmann::json Service::status_json() const {
     const auto s = jobs_->stats();
     j["sequences"] = {{"queued", s.queued}, {"running", s.running}, {"finished", s.finished},
                       {"max_running", cfg->sequences.max_running}, {"max_queued", cfg->sequences.max_queued},
-                      {"memory_in_flight_bytes", s.memory_in_flight_bytes}};
+                      {"memory_in_flight_bytes", s.memory_in_flight_bytes}, {"memory_kept_bytes", s.memory_kept_bytes}};
   }
   j["requests_in_flight"] = server_ ? server_->open_requests() : 0;
   return j;

@@ -27,7 +27,8 @@ json submission_json(const std::string& id, const slurm::Submission& s) {
   return {{"id", id},
           {"array_job_id", std::to_string(s.array_job_id)},
           {"merge_job_id", std::to_string(s.merge_job_id)},
-          {"shards", s.shards},
+          {"array", s.shards.spec()},  // the shards as sbatch --array takes them: "0-999999", "1,4-6"
+          {"shards", s.shards.size()},
           {"links", {{"self", std::string(kPrefix) + id}}}};
 }
 

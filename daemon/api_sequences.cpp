@@ -1,7 +1,7 @@
 // POST /v1/sequences and /v1/jobs: the daemon's transport for job::run_sequence
 // (job/sequence.hpp). The request is a render or encode request plus the settings marked
 // `sequence`, parsed by the same parser as `hdrd render --frames` / `hdrd encode 'shot.%04d.exr'`
-// and checked as far as it can be without a frame (job::check_sequence) before it is
+// and checked as far as it can be without a frame (job::check_request) before it is
 // answered 202; the job then runs in the registry (jobs.hpp) and its files go into the
 // dump directory as DUMP_DIR/NAME*.
 #include <fcntl.h>
@@ -111,14 +111,14 @@ void Service::post_sequences(HttpRequest& http, std::shared_ptr<Responder> respo
     return responder->reply(
         Reply::error(make_error("path.forbidden", "no dump directory is configured ([paths] dump_dir)", "dump")));
   const job::JobOptions jo = daemon_job_options(*cfg);
-  auto plan = job::check_sequence(*request, jo);
+  auto plan = job::check_request(*request, jo);
   if (!plan) return responder->reply(Reply::error(plan.error()));
   if (*source == job::Source::encode)  // a link in the pattern's directory, a list naming anything
     if (auto ok = check_files_in_root(cfg->paths.asset_root, plan->inputs, "images"); !ok)
       return responder->reply(Reply::error(ok.error()));
   constexpr std::size_t kQueueDepth = 2;  // job::SequenceOptions::queue_depth
   auto memory = estimate_sequence_memory(*request, plan->inputs.empty() ? std::filesystem::path() : plan->inputs.front(),
-                                         kQueueDepth, http.body.size(), cfg->limits);
+                                         kQueueDepth, http.body.size(), cfg->limits, plan->frames);
   if (!memory) return responder->reply(Reply::error(memory.error()));
 
   SequenceSpec spec;
@@ -151,7 +151,8 @@ void Service::get_jobs(HttpRequest&, std::shared_ptr<Responder> responder) {
                                {"queued", s.queued},
                                {"running", s.running},
                                {"finished", s.finished},
-                               {"memory_in_flight_bytes", s.memory_in_flight_bytes}}));
+                               {"memory_in_flight_bytes", s.memory_in_flight_bytes},
+                               {"memory_kept_bytes", s.memory_kept_bytes}}));
 }
 
 // GET /v1/jobs/{id}, /v1/jobs/{id}/result, /v1/jobs/{id}/sidecar.

@@ -4,7 +4,8 @@
 // (each with its own renderer, made on that thread with the daemon's backend, so a job
 // survives its client's disconnect and never holds up the single-frame workers), and a
 // bounded history of finished jobs. Admission weighs memory like the scheduler's: each job
-// carries its estimate (memory.hpp), the admitted sequences together stay within the budget.
+// carries its estimate (memory.hpp), the admitted sequences together stay within the budget,
+// with what the finished jobs keep (their records: a job's request is dropped when it ends).
 // Results are written by job::run_sequence into the dump directory, all or nothing; a
 // cancelled or failed job leaves no file.
 #pragma once
@@ -105,6 +106,9 @@ class JobRegistry {
   struct Stats {
     int queued = 0, running = 0, finished = 0;
     std::uint64_t memory_in_flight_bytes = 0;
+    // What the finished jobs of the history hold: their records, never their requests
+    // (dropped when a job ends). Counted in the budget with what is in flight.
+    std::uint64_t memory_kept_bytes = 0;
   };
   Stats stats() const;
 
@@ -115,6 +119,8 @@ class JobRegistry {
   void finish(const std::shared_ptr<Job>& job, JobState state, std::optional<Error> error);  // under no lock
   void trim_history();  // under mu_
   static JobInfo info_of(const Job& job);  // under mu_
+  static std::uint64_t kept_bytes(const Job& job);  // what a final job holds (Stats::memory_kept_bytes)
+  std::uint64_t kept_bytes_locked() const;           // over the history, under mu_
 
   JobRegistryOptions options_;
   mutable std::mutex mu_;

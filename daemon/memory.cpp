@@ -21,6 +21,7 @@ constexpr std::uint64_t kPerJobBytes = 32u << 20; // shadow map (2048^2 x 4 B), 
 constexpr std::uint64_t kSceneFileFactor = 4;     // a scene or glTF file: parsed, meshes, their GPU copy
 constexpr std::uint64_t kVideoEncoderFixedBytes = 192u << 20;  // estimate_sequence_memory (memory.hpp: measured)
 constexpr std::uint64_t kVideoEncoderBpp = 160;
+constexpr std::uint64_t kSequenceFrameBytes = 2u << 10;  // per frame: its sidecar entry and light summary (memory.hpp)
 constexpr std::size_t kExrHeaderPrefixBytes = 4u << 20;  // where an EXR's header must end for the estimate
 constexpr int kMaxMsaaSamples = shading::kMaxSamples;  // what the renderer clamps a request to
 
@@ -121,7 +122,8 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
 }
 
 Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
-                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits) {
+                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits,
+                                               int frames) {
   std::uint64_t frame = 0, pixels = 0;
   if (r.source == job::Source::encode) {
     // The header only, before the 202; never waiting on a FIFO.
@@ -143,7 +145,7 @@ Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const
     pixels = frame_pixels(r);
   }
   const std::uint64_t video = r.is_null("video.codec") ? 0 : kVideoEncoderFixedBytes + pixels * kVideoEncoderBpp;
-  return frame * (queue_depth + 2) + video;
+  return frame * (queue_depth + 2) + video + std::uint64_t(std::max(frames, 0)) * kSequenceFrameBytes;
 }
 
 }  // namespace hdrd::daemon

@@ -57,10 +57,14 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
 // writer has), plus the video encoder's own memory when the request has a codec: 192 MiB
 // + 160 B/px, an envelope over what it was measured to add (maximum resident set of `hdrd
 // encode --video` less the same run with --format raw; x265 medium / SVT-AV1 defaults on
-// 2 cores): 640x360 +138 / +128 MB, 1080p +519 / +505 MB, 4K +1150 / +1279 MB.
+// 2 cores): 640x360 +138 / +128 MB, 1080p +519 / +505 MB, 4K +1150 / +1279 MB. And what
+// grows with the length: 2 KiB per frame of `frames` (its sidecar entry and light summary,
+// kept until the end; issue 28.10 measured ~1 MB per 1000 frames), 0 when the count is not
+// known before the first frame (a render whose animation decides).
 // Errors: the EXR's own, request.limit for the UI.
 Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
-                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits);
+                                               std::size_t queue_depth, std::size_t body_bytes, const Limits& limits,
+                                               int frames = 0);
 
 // The PNG limits a request's UI overlay is read under: no larger than a frame may be.
 io::PngLimits ui_png_limits(const Limits& limits);

@@ -5,7 +5,6 @@
 #include <charconv>
 #include <fstream>
 #include <iterator>
-#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -164,36 +163,68 @@ void append_tasks(std::vector<TaskStatus>& out, const TaskStatus& proto, const s
   }
 }
 
-// "0-2", "1,4-6": the Slurm array spec of a sorted list of indices.
-std::string array_spec(const std::vector<std::uint32_t>& shards) {
-  std::string spec;
-  for (std::size_t i = 0; i < shards.size();) {
-    std::size_t j = i;
-    while (j + 1 < shards.size() && shards[j + 1] == shards[j] + 1) ++j;
-    if (!spec.empty()) spec += ',';
-    spec += std::to_string(shards[i]);
-    if (j > i) spec += "-" + std::to_string(shards[j]);
-    i = j + 1;
-  }
-  return spec;
-}
-
-Result<std::vector<std::uint32_t>> chosen_shards(const PlanHeader& plan, const SubmitOptions& options) {
-  std::vector<std::uint32_t> shards;
-  if (options.shards.empty()) {
-    for (std::uint32_t i = 0; i < plan.shards; ++i) shards.push_back(i);
-    return shards;
-  }
-  std::set<std::uint32_t> unique(options.shards.begin(), options.shards.end());
-  if (*unique.rbegin() >= plan.shards)
+Result<ShardRanges> chosen_shards(const PlanHeader& plan, const SubmitOptions& options) {
+  if (options.shards.empty()) return ShardRanges::all(plan.shards);
+  ShardRanges r = ShardRanges::of(options.shards);
+  if (r.last() >= plan.shards)
     return make_error("slurm.options",
-                      "shard " + std::to_string(*unique.rbegin()) + " is out of range (the plan has " +
-                          std::to_string(plan.shards) + " shards: 0-" + std::to_string(plan.shards - 1) + ")",
+                      "shard " + std::to_string(r.last()) + " is out of range (the plan has " + std::to_string(plan.shards) +
+                          " shards: 0-" + std::to_string(plan.shards - 1) + ")",
                       "shards");
-  return std::vector<std::uint32_t>(unique.begin(), unique.end());
+  return r;
 }
 
 }  // namespace
+
+ShardRanges ShardRanges::all(std::uint32_t shards) {
+  ShardRanges r;
+  if (shards > 0) r.add(0, shards - 1);
+  return r;
+}
+
+ShardRanges ShardRanges::of(std::vector<std::uint32_t> indices) {
+  std::sort(indices.begin(), indices.end());
+  indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+  ShardRanges r;
+  for (std::size_t i = 0; i < indices.size();) {
+    std::size_t j = i;
+    while (j + 1 < indices.size() && indices[j + 1] == indices[j] + 1) ++j;
+    r.add(indices[i], indices[j]);
+    i = j + 1;
+  }
+  return r;
+}
+
+void ShardRanges::add(std::uint32_t first, std::uint32_t last) {
+  runs_.emplace_back(first, last);
+  before_.push_back(size_);
+  size_ += std::size_t(last - first) + 1;
+}
+
+std::uint32_t ShardRanges::at(std::size_t k) const {
+  const auto it = std::upper_bound(before_.begin(), before_.end(), k) - 1;  // the run holding the k-th
+  const std::size_t run = std::size_t(it - before_.begin());
+  return runs_[run].first + std::uint32_t(k - *it);
+}
+
+std::optional<std::size_t> ShardRanges::position(std::uint32_t shard) const {
+  const auto it = std::upper_bound(runs_.begin(), runs_.end(), shard,
+                                   [](std::uint32_t v, const auto& run) { return v < run.first; });
+  if (it == runs_.begin()) return std::nullopt;
+  const std::size_t run = std::size_t(it - runs_.begin()) - 1;
+  if (shard > runs_[run].second) return std::nullopt;
+  return before_[run] + (shard - runs_[run].first);
+}
+
+std::string ShardRanges::spec() const {
+  std::string spec;
+  for (const auto& [first, last] : runs_) {
+    if (!spec.empty()) spec += ',';
+    spec += std::to_string(first);
+    if (last > first) spec += "-" + std::to_string(last);
+  }
+  return spec;
+}
 
 std::string_view to_string(JobState s) {
   switch (s) {
@@ -325,10 +356,7 @@ Result<PlanHeader> read_plan_header(const fs::path& plan_path) {
 
 SbatchCommands sbatch_commands(const ClusterConfig& config, const fs::path& plan_path, const PlanHeader& plan,
                                const fs::path& outbase, const SubmitOptions& options, std::uint64_t array_job_id) {
-  std::vector<std::uint32_t> shards = options.shards;
-  if (shards.empty())
-    for (std::uint32_t i = 0; i < plan.shards; ++i) shards.push_back(i);
-  std::string spec = array_spec(shards);
+  std::string spec = (options.shards.empty() ? ShardRanges::all(plan.shards) : ShardRanges::of(options.shards)).spec();
   if (options.max_parallel) spec += "%" + std::to_string(*options.max_parallel);
   const std::string chdir = "--chdir=" + plan.work_dir.string();
   SbatchCommands c;
@@ -382,8 +410,7 @@ Result<Submission> Client::submit(const fs::path& plan_arg, const fs::path& outb
   if (!fs::is_directory(plan->work_dir, ec))
     return make_error("slurm.options", "work dir " + plan->work_dir.string() + " cannot be created", "work_dir");
 
-  SubmitOptions chosen = options;
-  chosen.shards = *shards;
+  const SubmitOptions& chosen = options;
   auto sbatch = [&](std::vector<std::string> argv, const char* what) -> Result<std::uint64_t> {
     argv.erase(argv.begin());
     auto r = run("sbatch", std::move(argv));
@@ -400,7 +427,7 @@ Result<Submission> Client::submit(const fs::path& plan_arg, const fs::path& outb
     const Error& e = merge_id.error();
     return make_error(e.code, e.message + "; array job " + std::to_string(*array_id) + " cancelled", e.field);
   }
-  return Submission{*array_id, *merge_id, std::move(chosen.shards)};
+  return Submission{*array_id, *merge_id, std::move(*shards)};
 }
 
 namespace {
@@ -411,9 +438,7 @@ void collect(const std::vector<TaskStatus>& rows, const Submission& s, std::vect
   for (const auto& t : rows) {
     if (t.job_id == s.merge_job_id && !t.array_task && !merge) merge = t;
     if (t.job_id != s.array_job_id || !t.array_task) continue;
-    const auto it = std::lower_bound(s.shards.begin(), s.shards.end(), *t.array_task);
-    if (it != s.shards.end() && *it == *t.array_task && !shards[std::size_t(it - s.shards.begin())])
-      shards[std::size_t(it - s.shards.begin())] = t;
+    if (const auto k = s.shards.position(*t.array_task); k && !shards[*k]) shards[*k] = t;
   }
 }
 
@@ -456,7 +481,7 @@ Result<Progress> Client::progress(const Submission& s) const {
   p.merge = merge;
   for (std::size_t i = 0; i < shards.size(); ++i) {
     if (!shards[i]) {
-      p.unknown_shards.push_back(s.shards[i]);
+      p.unknown_shards.push_back(s.shards.at(i));
       continue;
     }
     switch (shards[i]->state) {

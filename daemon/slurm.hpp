@@ -82,10 +82,31 @@ struct SubmitOptions {
   std::optional<std::uint32_t> max_parallel;  // at most this many shards at once (--array=...%K)
 };
 
+// Shard indices as ascending runs of consecutive ones: what a submission keeps, so that a
+// 1e6-shard plan is one run of 8 bytes, not a 4 MB list (issue 28.10).
+class ShardRanges {
+ public:
+  ShardRanges() = default;
+  static ShardRanges all(std::uint32_t shards);                          // 0 .. shards-1
+  static ShardRanges of(std::vector<std::uint32_t> indices);             // any order, repeats dropped
+  std::size_t size() const { return size_; }                             // how many indices
+  std::uint32_t at(std::size_t k) const;                                 // the k-th, ascending (k < size())
+  std::optional<std::size_t> position(std::uint32_t shard) const;        // k with at(k) == shard
+  std::uint32_t last() const { return runs_.empty() ? 0 : runs_.back().second; }
+  std::string spec() const;                                              // Slurm's --array syntax: "0-2", "1,4-6"
+  std::size_t kept_bytes() const { return sizeof *this + runs_.capacity() * sizeof runs_[0]; }
+
+ private:
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  // [first, last], ascending, apart
+  std::vector<std::size_t> before_;                            // indices in the runs before each
+  std::size_t size_ = 0;
+  void add(std::uint32_t first, std::uint32_t last);
+};
+
 struct Submission {
   std::uint64_t array_job_id = 0;
   std::uint64_t merge_job_id = 0;
-  std::vector<std::uint32_t> shards;        // the submitted shard indices, ascending
+  ShardRanges shards;                       // the submitted shard indices
 };
 
 struct Progress {

@@ -81,7 +81,9 @@ Result<pid_t> spawn(const ProcessSpec& spec, int out_w, int err_w) {
   sigemptyset(&none);
   posix_spawnattr_setsigdefault(&attr, &all);
   posix_spawnattr_setsigmask(&attr, &none);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+  // Its own process group (pgid = its pid), so that a timeout stops what it started too.
+  posix_spawnattr_setpgroup(&attr, 0);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETPGROUP);
   std::vector<std::string> argv_s(spec.argv.begin(), spec.argv.end());
   std::vector<std::string> env_s = child_environment(spec);
   auto argv = pointers(argv_s);
@@ -95,7 +97,10 @@ Result<pid_t> spawn(const ProcessSpec& spec, int out_w, int err_w) {
   return pid;
 }
 
+// Kills the child's whole process group (a Slurm wrapper's own children with it: issue
+// 28.11), before reaping the child, whose pid is the group's id until then.
 void kill_and_reap(pid_t pid) {
+  ::kill(-pid, SIGKILL);
   ::kill(pid, SIGKILL);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {

@@ -26,8 +26,9 @@ struct ProcessResult {
   std::string out, err;  // what it wrote on stdout and stderr
 };
 
-// Errors: "process.spawn" (the program is missing or cannot run), "process.timeout" and
-// "process.output_too_large" (the child is killed with SIGKILL and reaped first). A program
+// The child runs in its own process group. Errors: "process.spawn" (the program is missing
+// or cannot run), "process.timeout" and "process.output_too_large" (the child's process
+// group, what it started included, is killed with SIGKILL and the child reaped first). A program
 // that runs and fails is not an error here: look at exit_code.
 Result<ProcessResult> run_process(const ProcessSpec& spec);
 

@@ -74,6 +74,7 @@ constexpr StatusEntry kStatus[] = {
     {"gltf.", 422},
     {"camera.", 422},
     {"environment.", 422},
+    {"hdr.", 422},      // a Radiance .hdr environment map that cannot be read (shading/radiance_hdr.cpp), as exr.*
     {"pattern.", 422},
     {"selftest.", 422},
     {"hdr_metadata.", 422},

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <fstream>
 #include <mutex>
 #include <regex>
 #include <thread>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -22,7 +25,9 @@
 #include "encode/tone/temporal.hpp"
 #include "encode/video/sequence_metadata.hpp"
 #include "encode/video/writer.hpp"
+#include "job/build.hpp"
 #include "shading/renderer.hpp"
+#include "shading/scene_loader.hpp"
 
 namespace hdrd::job {
 namespace fs = std::filesystem;
@@ -688,6 +693,62 @@ Result<void> run_frames(const FrameLoop& loop, int first, int count, std::option
 }
 
 }  // namespace
+
+namespace {
+
+// The setting an up-front error is about, as the front end spells it, leads its message
+// (`--width/--height: 4:2:0 video needs an even width and height, not 95x64`): the CLI
+// reported these as `frame 0 (t = 0 s): ...` after rendering frame 0 (issue 29.13).
+Error naming_setting(Error e, Spelling spelling) {
+  if (e.field.empty()) return e;
+  std::string name;
+  if (e.field == "size") name = label("width", spelling) + "/" + label("height", spelling);
+  else if (e.field == "output") name = spelling == Spelling::cli ? "-o" : "output";
+  else name = label(e.field, spelling);
+  if (e.message.rfind(name, 0) != 0) e.message = name + ": " + e.message;
+  return e;
+}
+
+}  // namespace
+
+Result<void> check_output_base(const fs::path& outbase) {
+  if (outbase.empty() || !outbase.has_filename())
+    return make_error("dump.path", fmt::format("output base '{}' has no file name", outbase.string()), "output");
+  const fs::path dir = outbase.has_parent_path() ? outbase.parent_path() : fs::path(".");
+  std::error_code ec;
+  const auto st = fs::status(dir, ec);
+  if (ec || !fs::exists(st))
+    return make_error("dump.path", fmt::format("{}: the directory {} does not exist", outbase.string(), dir.string()), "output");
+  if (!fs::is_directory(st))
+    return make_error("dump.path", fmt::format("{}: {} is not a directory", outbase.string(), dir.string()), "output");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    return make_error("dump.path", fmt::format("{}: cannot write into {}: {}", outbase.string(), dir.string(), std::strerror(errno)),
+                      "output");
+  return {};
+}
+
+Result<void> check_inline_scene(const FrameRequest& request, const JobOptions& options) {
+  if (request.source != Source::render || request.scene.kind != SceneRef::Kind::inline_json) return {};
+  // The renderer's own two steps (shading/render_frame.cpp): strict parse, then validate.
+  const shading::RenderRequest rq = render_request(request, options);
+  auto scene = shading::parse_scene_json(*rq.scene_json, rq.load);
+  Result<void> ok = scene ? shading::validate(*scene) : Result<void>(scene.error());
+  if (ok) return {};
+  Error e = ok.error();
+  e.field = e.field.empty() ? "scene" : e.field.rfind("scene", 0) == 0 ? e.field : "scene." + e.field;
+  if (e.message.rfind("scene", 0) != 0) e.message = "scene: " + e.message;
+  return e;
+}
+
+Result<SequenceCheck> check_request(const FrameRequest& request, const JobOptions& options, const CheckOptions& check) {
+  if (!check.outbase.empty())
+    if (auto ok = check_output_base(check.outbase); !ok) return naming_setting(ok.error(), check.spelling);
+  if (auto ok = check_inline_scene(request, options); !ok) return ok.error();
+  if (!request.sequence) return SequenceCheck{};
+  auto r = check_sequence(request, options);
+  if (!r) return naming_setting(r.error(), check.spelling);
+  return r;
+}
 
 Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options) {
   auto src = frame_source(request, options.files);

@@ -103,6 +103,24 @@ struct SequenceCheck {
 };
 Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptions& options = {});
 
+// What a front end checks before any work, the same for every front end (issue 28.7 and
+// 29.13): the output base's directory (the CLI's -o: it exists and can be written), an
+// inline scene (parsed and validated as the renderer will), and for a sequence
+// check_sequence. The daemon runs it before its 202, the CLI before its first frame; an
+// error's message leads with the setting it is about, as `spelling` names it (--width/--height,
+// --video, -o ...), never with a frame.
+struct CheckOptions {
+  std::filesystem::path outbase;       // empty: not checked (the daemon's dump directory is checked at start)
+  Spelling spelling = Spelling::json;
+};
+Result<SequenceCheck> check_request(const FrameRequest& request, const JobOptions& options = {},
+                                    const CheckOptions& check = {});
+// dump.path (field "output") naming what is wrong with OUTBASE: no file name, no such
+// directory, not a directory, not writable.
+Result<void> check_output_base(const std::filesystem::path& outbase);
+// A render's inline scene (request `scene` as a JSON object): scene.* errors, field scene.PATH.
+Result<void> check_inline_scene(const FrameRequest& request, const JobOptions& options = {});
+
 // The analysis pass of a planned sequence: every frame metered and decided exactly as
 // run_sequence decides it in line (each frame's job stops once it is decided: no encode,
 // no outputs). A render is rendered (its metering is the rendered frame's); an EXR is read.

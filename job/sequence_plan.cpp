@@ -144,6 +144,7 @@ Result<SequencePlan> make_sequence_plan(const json& request, Source source, int 
   plan.request = absolute_paths(request);
   auto parsed = parse_request_json(plan.request, plan_context(source));
   if (!parsed) return parsed.error();
+  if (auto ok = check_request(*parsed, options.job); !ok) return ok.error();  // before the analysis renders a frame
   auto track = analyse_sequence(*parsed, options);
   if (!track) return track.error();
   plan.track = std::move(*track);

@@ -214,6 +214,34 @@ TEST(DaemonAbuse, LinksInTheAssetRootToNonEdidFilesAre422) {
   EXPECT_TRUE(d.alive());
 }
 
+// Issue 28.9: every malformed Radiance .hdr environment map answered 500 (hdr.*), where the
+// EXR equivalents answered 422: the request named a file that cannot be used, 422 for both.
+TEST(DaemonAbuse, MalformedEnvironmentMapsAre422ForRadianceAsForExr) {
+  DaemonProcess d;
+  REQUIRE_DAEMON(d);
+  auto radiance = [](const std::string& resolution, const std::string& data) {
+    return "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + resolution + data;
+  };
+  const std::pair<const char*, std::string> maps[] = {
+      {"huge.hdr", radiance("-Y 100000 +X 200000\n", "")},                                        // declared size
+      {"rle-truncated.hdr", radiance("-Y 8 +X 16\n", std::string("\x02\x02\x00\x10\x83", 5))},  // RLE ends early
+      {"rle-overrun.hdr", radiance("-Y 8 +X 16\n", std::string("\x02\x02\x00\x10\xff\x01", 6))},  // run of 127 in 16
+      {"no-resolution.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"},
+      {"truncated.exr", tiny_exr().substr(0, 40)},
+  };
+  auto c = d.client();
+  for (const auto& [name, bytes] : maps) {
+    std::ofstream(d.assets() / name, std::ios::binary) << bytes;
+    auto r = request(c, "POST", "/v1/render",
+                     fmt::format(R"({{"width":16,"height":8,"environment":{{"file":"{}"}}}})", name),
+                     {{"Content-Type", "application/json"}});
+    EXPECT_EQ(r.status, 422) << name << ": " << r.body;
+    const std::string family = fs::path(name).extension() == ".hdr" ? "hdr." : "exr.";
+    EXPECT_EQ(error_code(r).rfind(family, 0), 0u) << name << ": " << r.body;
+  }
+  EXPECT_TRUE(d.alive());
+}
+
 // A chunk line that never ends filled libmicrohttpd's buffer and got its HTML 500. Bodies
 // must declare their length: a chunked one is answered 411 with the JSON error, before
 // MHD reads a byte of it.

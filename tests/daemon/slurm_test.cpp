@@ -5,6 +5,7 @@
 // sbatch command lines must equal deploy/slurm/submit.sh's.
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -241,6 +243,29 @@ TEST(SlurmPlan, RelativeWorkDirIsRelativeToThePlan) {
   EXPECT_EQ(missing.error().message, "plan /nonexistent/plan.json: no such file");
 }
 
+// Issue 28.10: a submission keeps its shards as ranges: a 1e6-shard plan is one range, not
+// a 4 MB list, and every index is still found in order.
+TEST(SlurmShards, RangesHoldEveryIndexInFewBytes) {
+  const ShardRanges all = ShardRanges::all(1000000);
+  EXPECT_EQ(all.size(), 1000000u);
+  EXPECT_LT(all.kept_bytes(), 256u);
+  EXPECT_EQ(all.spec(), "0-999999");
+  EXPECT_EQ(all.at(0), 0u);
+  EXPECT_EQ(all.at(999999), 999999u);
+  EXPECT_EQ(all.position(123456), std::optional<std::size_t>(123456));
+  EXPECT_FALSE(all.position(1000000));
+  const ShardRanges some = ShardRanges::of({9, 5, 1, 2, 3, 9, 12, 13});
+  EXPECT_EQ(some.spec(), "1-3,5,9,12-13");
+  ASSERT_EQ(some.size(), 7u);
+  const std::vector<std::uint32_t> expected{1, 2, 3, 5, 9, 12, 13};
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(some.at(k), expected[k]) << k;
+    EXPECT_EQ(some.position(expected[k]), std::optional<std::size_t>(k)) << k;
+  }
+  for (std::uint32_t missing : {0u, 4u, 6u, 10u, 14u}) EXPECT_FALSE(some.position(missing)) << missing;
+  EXPECT_EQ(some.last(), 13u);
+}
+
 // --- subprocesses --------------------------------------------------------------------------
 
 ProcessSpec spec_of(std::vector<std::string> argv) {
@@ -293,6 +318,28 @@ TEST(Subprocess, TimeoutKillsTheChild) {
   EXPECT_EQ(r.error().code, "process.timeout");
   EXPECT_EQ(r.error().message, "sleep did not finish within 200 ms; stopped");
   EXPECT_LT(took, std::chrono::seconds(5));
+}
+
+// Issue 28.11: a timeout killed the command but not what it started (a wrapper script's
+// sbatch, here a sleep that holds its output pipe): the whole process group goes.
+TEST(Subprocess, TimeoutKillsWhatTheChildStarted) {
+  hdrd::testing::TempDir dir;
+  const std::string pidfile = (dir / "grandchild.pid").string();
+  ProcessSpec spec = spec_of({"sh", "-c", "sleep 30 & echo $! > '" + pidfile + "'; wait"});
+  spec.timeout = std::chrono::milliseconds(300);
+  auto r = run_process(spec);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, "process.timeout");
+  const pid_t grandchild = std::stoi(hdrd::testing::read_file(pidfile));
+  // Gone, or a zombie its new parent has not reaped yet: not running.
+  auto running = [&] {
+    std::ifstream stat("/proc/" + std::to_string(grandchild) + "/stat");
+    std::string pid, comm, state;
+    return stat >> pid >> comm >> state && state != "Z" && state != "X";
+  };
+  for (int i = 0; i < 200 && running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_FALSE(running()) << "the child's own child " << grandchild << " is still running";
+  if (running()) ::kill(grandchild, SIGKILL);
 }
 
 TEST(Subprocess, OutputBeyondTheBoundStopsTheChild) {
@@ -382,7 +429,7 @@ TEST_F(FakeSlurm, SubmitsTheArrayThenTheMergeAfterIt) {
   ASSERT_TRUE(s) << s.error().message;
   EXPECT_EQ(s->array_job_id, 101u);
   EXPECT_EQ(s->merge_job_id, 102u);
-  EXPECT_EQ(s->shards, (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_EQ(s->shards.spec(), "0-2");
   const std::string scripts = (hdrd::testing::source_dir() / "deploy/slurm").string();
   const std::string work = (dir() / "plans/w").string();
   EXPECT_EQ(calls(), (std::vector<std::string>{
@@ -446,7 +493,7 @@ TEST_F(FakeSlurm, RefusesBadPlansAndOptionsBeforeCallingSbatch) {
 
 TEST_F(FakeSlurm, ProgressFromSqueue) {
   write_file(dir() / "squeue.out", recorded("squeue-failed-shard.txt"));
-  const Submission s{10, 11, {0, 1, 2, 3, 4, 5}};
+  const Submission s{10, 11, ShardRanges::of({0, 1, 2, 3, 4, 5})};
   auto p = Client(config()).progress(s);
   ASSERT_TRUE(p) << p.error().message;
   EXPECT_EQ(p->completed, 3u);
@@ -473,7 +520,7 @@ TEST_F(FakeSlurm, ProgressFallsBackToSacctForForgottenJobs) {
   write_file(dir() / "squeue.err", recorded("squeue-unknown.err"));
   write_file(dir() / "squeue.rc", "1");
   write_file(dir() / "sacct.out", "10_0|COMPLETED|0:0\n10_1|COMPLETED|0:0\n10_2|COMPLETED|0:0\n11|COMPLETED|0:0\n");
-  const Submission s{10, 11, {0, 1, 2}};
+  const Submission s{10, 11, ShardRanges::of({0, 1, 2})};
   auto p = Client(config()).progress(s);
   ASSERT_TRUE(p) << p.error().message;
   EXPECT_EQ(p->state, JobState::completed);
@@ -493,7 +540,7 @@ TEST_F(FakeSlurm, ProgressFallsBackToSacctForForgottenJobs) {
 TEST_F(FakeSlurm, ProgressNamesShardsNobodyKnows) {
   write_file(dir() / "squeue.out", "10|2|RUNNING|None\n11|N/A|PENDING|Dependency\n");
   write_file(dir() / "sacct.rc", "1");
-  auto p = Client(config()).progress(Submission{10, 11, {0, 1, 2}});
+  auto p = Client(config()).progress(Submission{10, 11, ShardRanges::of({0, 1, 2})});
   ASSERT_TRUE(p);
   EXPECT_EQ(p->unknown_shards, (std::vector<std::uint32_t>{0, 1}));
   EXPECT_EQ(p->running, 1u);
@@ -502,19 +549,19 @@ TEST_F(FakeSlurm, ProgressNamesShardsNobodyKnows) {
 
 TEST_F(FakeSlurm, ProgressReportsBrokenOutputAndHungTools) {
   write_file(dir() / "squeue.out", "10|0|RUNNING\n");
-  auto broken = Client(config()).progress(Submission{10, 11, {0}});
+  auto broken = Client(config()).progress(Submission{10, 11, ShardRanges::of({0})});
   ASSERT_FALSE(broken);
   EXPECT_EQ(broken.error().code, "slurm.squeue_output");
   write_file(bin() / "squeue", "#!/bin/sh\nexec sleep 30\n", true);
   auto c = config();
   c.command_timeout = std::chrono::milliseconds(300);
-  auto hung = Client(c).progress(Submission{10, 11, {0}});
+  auto hung = Client(c).progress(Submission{10, 11, ShardRanges::of({0})});
   ASSERT_FALSE(hung);
   EXPECT_EQ(hung.error().code, "process.timeout");
 }
 
 TEST_F(FakeSlurm, CancelsMergeAndArray) {
-  ASSERT_TRUE(Client(config()).cancel(Submission{10, 11, {0, 1}}));
+  ASSERT_TRUE(Client(config()).cancel(Submission{10, 11, ShardRanges::of({0, 1})}));
   EXPECT_EQ(calls(), (std::vector<std::string>{"scancel 11 10"}));
 }
 

@@ -123,7 +123,10 @@ TEST(WireError, StatusPerCode) {
       // issue 28, the file model (docs/api.md "Security"): a link or hard link refused is 403, a
       // FIFO or device 422, a result replaced since the job wrote it 410, a colliding name 422
       {"path.symlink", 403},         {"path.hard_link", 403},        {"path.not_regular", 422},
-      {"job.file_changed", 410},     {"name.collision", 422}};
+      {"job.file_changed", 410},     {"name.collision", 422},
+      // issue 28.9: a malformed Radiance map is the request's, as a malformed EXR is
+      {"hdr.size", 422},             {"hdr.rle", 422},               {"hdr.truncated", 422},
+      {"hdr.resolution", 422},       {"hdr.file", 422},              {"hdr_metadata.x", 422}};
   for (const auto& [code, status] : table) EXPECT_EQ(http_status(make_error(code, "m")), status) << code;
   EXPECT_FALSE(status_of("something.new")) << "an unknown family has no status";
   EXPECT_EQ(http_status(make_error("something.new", "m")), 500u);

@@ -259,6 +259,37 @@ TEST(SequenceCli, ErrorsAreOneLineAndLeaveNothing) {
   }
 }
 
+// Issues 28.7 and 29.13: what the settings cannot do is refused before any work, by the
+// check the daemon makes before its 202 (job::check_request), in one line that names the
+// setting. It was found at frame 0, after rendering it, as `frame 0 (t = 0 s): cannot open
+// libx265: Invalid argument` (64x8, 256x2), `frame 0 (t = 0 s): 4:2:0 video needs ...` and
+// the like; a missing output directory only when the first file was written.
+TEST(SequenceCli, SettingErrorsNameTheSettingBeforeAnyWork) {
+  TempDir d;
+  fs::create_directory(d / "out");
+  const std::string render = "render --scene furnace --samples 1 ";
+  struct Case {
+    std::string args, outbase, setting;
+  };
+  const std::string out = (d / "out" / "x").string(), missing = (d / "out" / "none" / "x").string();
+  const std::vector<Case> cases = {
+      {render + "--width 64 --height 8 --frames 2 --video hevc", out, "--width/--height: x265 needs"},
+      {render + "--width 256 --height 2 --frames 2 --video hevc", out, "--width/--height: x265 needs"},
+      {render + "--width 65 --height 32 --frames 2 --video hevc", out, "--width/--height: 4:2:0 video"},
+      {render + "--width 64 --height 32 --frames 2 --video h264 --mode hdr10", out, "--video: H.264 video is for SDR only"},
+      {render + "--width 64 --height 32 --frames 2 --video hevc", missing, "-o: "},
+      {render + "--width 64 --height 32", missing, "-o: "},  // a single frame too
+  };
+  for (const auto& c : cases) {
+    const auto r = run_command(fmt::format("'{}' {} -o '{}'", hdrd(), c.args, c.outbase));
+    EXPECT_EQ(r.exit_code, 1) << c.args;
+    EXPECT_EQ(r.err.rfind("hdrd: error: " + c.setting, 0), 0u) << c.args << ": " << r.err;
+    EXPECT_EQ(r.err.find("frame 0"), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.args << ": nothing ran before: " << r.err;
+    EXPECT_TRUE(fs::is_empty(d / "out")) << c.args;
+  }
+}
+
 TEST(SequenceCli, RenderSequenceOfAStillSceneIsSteady) {
   TempDir d;
   const auto r = run_command(fmt::format("'{}' render --scene furnace --width 48 --height 32 --samples 1 --frames 3 "

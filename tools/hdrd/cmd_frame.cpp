@@ -180,10 +180,13 @@ void run(const FrameCommand& o) {
   auto ctx = cli_context(o.source);
   ctx.sequence = sequence;
   auto request = job::parse_request_json(doc, ctx);
-  if (request && ctx.sequence) return run_sequence(o, std::move(*request));
   if (!request) throw HdrdError(request.error());
   job::JobOptions options;
   options.threads = static_cast<int>(request->integer("threads"));
+  // Everything knowable before any work, as the daemon checks it before its 202.
+  if (auto ok = job::check_request(*request, options, {.outbase = o.outbase, .spelling = job::Spelling::cli}); !ok)
+    throw HdrdError(ok.error());
+  if (ctx.sequence) return run_sequence(o, std::move(*request));
   job::EncodeInput input;
   if (o.source == job::Source::encode) input.path = o.input;
   auto frame_job = job::FrameJob::create(std::move(*request), options, input);
