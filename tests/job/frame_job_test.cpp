@@ -127,20 +127,19 @@ TEST(FrameJob, RenderUsesEverySettingItTakes) {
   EXPECT_EQ(result->encoder, "cpu");
 }
 
-// RTR4 §8.2.2 meters the light: a render with a dominant light is exposed from it, one
-// without from its histogram; an EXR is shown as authored.
+// A render meters its picture (Unreal's histogram window), whatever light it has: light-based
+// exposure only when its illuminance is given; an EXR is shown as authored.
 TEST(FrameJob, ExposureRule) {
   auto req = [](Source s, const char* body) {
     auto r = parse_request_json(json::parse(body), cli_context(s));
     EXPECT_TRUE(r.ok()) << r.error().message;
     return *r;
   };
-  EXPECT_EQ(exposure_mode(req(Source::render, "{}"), true), exposure::Mode::light);
-  EXPECT_EQ(exposure_mode(req(Source::render, "{}"), false), exposure::Mode::histogram);
-  EXPECT_EQ(exposure_mode(req(Source::encode, "{}"), false), exposure::Mode::manual);
-  EXPECT_EQ(exposure_mode(req(Source::encode, R"({"exposure":{"ev100":10}})"), false), exposure::Mode::camera);
-  EXPECT_EQ(exposure_mode(req(Source::render, R"({"exposure":{"mode":"log-average"}})"), true),
-            exposure::Mode::log_average)
+  EXPECT_EQ(exposure_mode(req(Source::render, "{}")), exposure::Mode::histogram);
+  EXPECT_EQ(exposure_mode(req(Source::render, R"({"exposure":{"illuminance_lux":1000}})")), exposure::Mode::light);
+  EXPECT_EQ(exposure_mode(req(Source::encode, "{}")), exposure::Mode::manual);
+  EXPECT_EQ(exposure_mode(req(Source::encode, R"({"exposure":{"ev100":10}})")), exposure::Mode::camera);
+  EXPECT_EQ(exposure_mode(req(Source::render, R"({"exposure":{"mode":"log-average"}})")), exposure::Mode::log_average)
       << "a mode given is the mode used";
 }
 
