@@ -82,7 +82,12 @@ struct FrameLight {
   // maxRGB distribution: pixels per 12-bit PQ level round(PQ_inv(maxRGB) * 4095). For
   // hdr10 every 10-bit code has a level of its own.
   std::array<std::uint32_t, kPqBins> pq_counts{};
+  // The p-th percentile of maxRGB (p in (0, 100]): the PQ level of the ceil(p n / 100)-th
+  // smallest pixel, in cd/m2 (within half a 12-bit PQ level); 0 without pixels.
+  double percentile_nits(double p) const;
 };
+// The percentiles the sidecar's frame_light lists (HDR10+'s nine and 99.9).
+inline constexpr std::array<double, 10> kFrameLightPercentiles{1, 5, 10, 25, 50, 75, 90, 95, 99, 99.9};
 FrameLight measure_frame_light(const EncodedFrame& frame);
 
 // MaxCLL / MaxFALL of one frame: FrameLight's max_nits and mean_nits. Zero for SDR modes.

@@ -476,6 +476,71 @@ void set_exposure_scale(PreparedPipeline& p, double scale) {
   p.scene_scale = p.unit_nits * scale;
 }
 
+namespace {
+
+// Mean maxRGB (cd/m2, container primaries) of the reference path over the sampled pixels.
+double predicted_frame_average(const PreparedPipeline& p, const std::vector<Vec3>& px) {
+  double sum = 0;
+  for (const Vec3& v : px) {
+    const Vec3 n = reference_display_nits(p, v);
+    sum += std::max({n.x, n.y, n.z, 0.0});
+  }
+  return px.empty() ? 0.0 : sum / static_cast<double>(px.size());
+}
+
+std::vector<Vec3> frame_average_samples(const SceneInput& in) {
+  std::vector<Vec3> px;
+  const int w = in.image ? in.image->width : in.half ? in.half->width : 0;
+  const int h = in.image ? in.image->height : in.half ? in.half->height : 0;
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (n == 0) return px;
+  const std::size_t step = std::max<std::size_t>(1, n / kFrameAverageSamples);
+  px.reserve(n / step + 1);
+  for (std::size_t k = 0; k < n; k += step) {
+    if (in.image) {
+      const float* q = in.image->rgba.data() + k * 4;
+      px.push_back(Vec3{q[0], q[1], q[2]});
+    } else {
+      const auto* q = in.half->rgba.data() + k * 4;
+      px.push_back(Vec3{half_to_float(q[0]), half_to_float(q[1]), half_to_float(q[2])});
+    }
+  }
+  return px;
+}
+
+}  // namespace
+
+void apply_frame_average_limit(PreparedPipeline& p, const SceneInput& in) {
+  const auto limit = p.settings.tone.max_frame_average_nits;
+  p.frame_average_limit.reset();
+  if (!limit || !p.curve_info) return;
+  FrameAverageLimit r;
+  r.limit_nits = *limit;
+  if (p.curve_info->name == "clip") {
+    r.not_applied = "the clip curve's levels are exact (x * paper white)";
+  } else if (!p.settings.target.is_hdr()) {
+    r.not_applied = "an SDR output";
+  }
+  const std::vector<Vec3> px = frame_average_samples(in);
+  r.predicted_nits = r.limited_nits = predicted_frame_average(p, px);
+  if (r.not_applied.empty() && r.predicted_nits > *limit) {
+    // The frame average rises with the exposure: bisect the factor in stops, keeping the
+    // side that is within the limit, to 1/1000 stop.
+    const double scale = p.metering.scale;
+    double lo = -40, hi = 0;  // log2 factor: lo within the limit, hi above it
+    while (hi - lo > 1e-3) {
+      const double mid = 0.5 * (lo + hi);
+      set_exposure_scale(p, scale * std::exp2(mid));
+      (predicted_frame_average(p, px) <= *limit ? lo : hi) = mid;
+    }
+    r.exposure_factor = std::exp2(lo);
+    set_exposure_scale(p, scale * r.exposure_factor);
+    r.limited_nits = predicted_frame_average(p, px);
+    r.applied = true;
+  }
+  p.frame_average_limit = r;
+}
+
 std::string_view source_average_param(const tonemap::ToneCurveInfo& curve) {
   for (const auto& p : curve.params)
     if (p.name == "source_avg_nits") return p.name;
@@ -570,8 +635,19 @@ nlohmann::json PreparedPipeline::describe() const {
                    {"scene_scale", scene_scale}};
   if (metering.ev100) j["exposure"]["ev100"] = *metering.ev100;
   if (ex.mode == exposure::Mode::histogram)
-    j["exposure"]["percentile"] = {{"percentile", ex.percentile}, {"target", ex.percentile_target},
+    j["exposure"]["percentile"] = {{"percentile", ex.percentile ? nlohmann::json(*ex.percentile) : nlohmann::json("window-average")},
+                                   {"target", ex.percentile_target},
                                    {"ignore_dark", ex.ignore_dark_fraction}, {"ignore_bright", ex.ignore_bright_fraction}};
+  if (ex.mode == exposure::Mode::histogram || ex.mode == exposure::Mode::log_average)
+    j["exposure"]["ev100_range"] = {ex.min_ev100, ex.max_ev100};
+  if (const auto& l = frame_average_limit) {
+    j["exposure"]["frame_average_limit"] = {{"limit_nits", l->limit_nits},
+                                            {"applied", l->applied},
+                                            {"predicted_nits", l->predicted_nits},
+                                            {"limited_nits", l->limited_nits},
+                                            {"exposure_factor", l->exposure_factor}};
+    if (!l->not_applied.empty()) j["exposure"]["frame_average_limit"]["not_applied"] = l->not_applied;
+  }
   j["gamut_mapping"] = to_string(settings.gamut);
   j["dither"] = settings.dither;
   if (settings.grade) j["grade"] = settings.grade->describe();

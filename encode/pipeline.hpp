@@ -35,6 +35,19 @@ struct ToneSettings {
   std::string curve;                       // empty: the mode's default (tonemap::default_curve)
   tonemap::ParamValues params;
   std::optional<tonemap::Apply> apply;     // empty: the curve's default
+  // HDR outputs: the frame average of maxRGB (cd/m2, what MaxFALL measures) is held at or
+  // below this by lowering the exposure (a display's ABL budget); never with `clip`.
+  std::optional<double> max_frame_average_nits;
+};
+
+// What apply_frame_average_limit decided (the sidecar's exposure.frame_average_limit).
+struct FrameAverageLimit {
+  double limit_nits = 0;
+  double predicted_nits = 0;        // the frame average before the limit, from the samples
+  double limited_nits = 0;          // after it (= predicted when not applied)
+  double exposure_factor = 1;       // the exposure scale was multiplied by this (<= 1)
+  bool applied = false;
+  std::string not_applied;          // why not, when it is not (clip curve, SDR output)
 };
 
 struct UiSettings {
@@ -87,6 +100,7 @@ struct PreparedPipeline {
   // The gamut map from the input's gamut into the container's, for every map but ictcp
   // and clip (which need no tables); null for those and for scrgb.
   std::shared_ptr<const gamut::Mapper> gamut_mapper;
+  std::optional<FrameAverageLimit> frame_average_limit;  // when tone.max_frame_average_nits is set
   nlohmann::json describe() const;         // settings for the sidecar
 };
 
@@ -109,6 +123,14 @@ Result<void> set_source_peak(PreparedPipeline& p, std::optional<double> peak_rel
                              std::optional<double> average_relative = {});
 // The scene-average parameter of curves that take one ("source_avg_nits"), or empty.
 std::string_view source_average_param(const tonemap::ToneCurveInfo& curve);
+// tone.max_frame_average_nits: predicts the frame average of maxRGB in the display light
+// (the reference path on a subsample of at most kFrameAverageSamples input pixels) and,
+// when it is above the limit, lowers the exposure scale until it is not (bisection in
+// stops). Call it after the exposure is final (a sequence's decision included). Not
+// applied with the `clip` curve (its levels are exact: x * paper white) or to SDR
+// outputs; no-op without the setting. The UI overlay is not part of the prediction.
+inline constexpr std::size_t kFrameAverageSamples = 1u << 14;
+void apply_frame_average_limit(PreparedPipeline& p, const SceneInput& input);
 // The name of the curve's source-peak parameter, empty when it has none.
 std::string_view source_peak_param(const tonemap::ToneCurveInfo& curve);
 

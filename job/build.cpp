@@ -138,11 +138,14 @@ Result<UiSettings> load_ui(const FrameRequest& r, const io::InputFiles& files) {
 
 }  // namespace
 
-exposure::Mode exposure_mode(const FrameRequest& r, bool illuminance_known) {
+exposure::Mode exposure_mode(const FrameRequest& r) {
   const std::string m = r.text("exposure.mode");
   if (m != "auto") return *exposure::parse_mode(m);
   if (!r.is_null("exposure.ev100")) return exposure::Mode::camera;
-  if (illuminance_known) return exposure::Mode::light;
+  // Light-based exposure only when asked for by its illuminance: a render's own dominant
+  // light is the sun for an interior seen through a door (the hdr scene), which left the
+  // room black; renders meter their picture as Unreal does (histogram window average).
+  if (!r.is_null("exposure.illuminance_lux")) return exposure::Mode::light;
   return r.source == Source::render ? exposure::Mode::histogram : exposure::Mode::manual;
 }
 
@@ -157,16 +160,19 @@ Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarge
   s.tone.curve = r.text("tone.curve");
   for (const auto& [k, v] : r.at("tone.params").items()) s.tone.params[k] = v.get<double>();
   if (const std::string apply = r.text("tone.apply"); !apply.empty()) s.tone.apply = tonemap::parse_apply(apply);
+  s.tone.max_frame_average_nits = r.optional_number("tone.max_frame_average_nits");
 
   auto& ex = s.exposure;
-  ex.mode = exposure_mode(r, !r.is_null("exposure.illuminance_lux"));
+  ex.mode = exposure_mode(r);
   ex.compensation_ev = r.number("exposure.compensation_ev");
   ex.gain = r.number("exposure.gain");
   if (!r.is_null("exposure.ev100")) ex.ev100 = r.number("exposure.ev100");
   ex.aperture_f = r.number("exposure.aperture_f");
   ex.shutter_s = r.number("exposure.shutter_s");
   ex.iso = r.number("exposure.iso");
-  ex.percentile = r.number("exposure.percentile");
+  ex.percentile = r.optional_number("exposure.percentile");
+  ex.min_ev100 = r.number("exposure.min_ev100");
+  ex.max_ev100 = r.number("exposure.max_ev100");
   ex.percentile_target = r.number("exposure.percentile_target");
   ex.ignore_dark_fraction = r.number("exposure.ignore_dark_fraction");
   ex.ignore_bright_fraction = r.number("exposure.ignore_bright_fraction");

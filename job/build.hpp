@@ -34,11 +34,12 @@ Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarge
                                        std::vector<std::string>* warnings, LoadedResources* resources = nullptr,
                                        const io::InputFiles& files = {});
 
-// The exposure rule (exposure.mode "auto", RTR4 §8.2.2: meter the light, not the pixels):
-// camera when ev100 is given; light-based when the illuminance is known (a render's
-// dominant light, or exposure.illuminance_lux); a render without one: histogram; EXR
-// input: manual (relative input is already exposed, absolute input keeps its cd/m2).
-exposure::Mode exposure_mode(const FrameRequest& r, bool illuminance_known);
+// The exposure rule (exposure.mode "auto"): camera when ev100 is given; light-based when
+// exposure.illuminance_lux is given; a render: histogram (Unreal's window average, which
+// meters what the camera sees: a room seen from inside is exposed for the room even with
+// the sun outside its door); EXR input: manual (relative input is already exposed, graded
+// footage keeps its levels, absolute input keeps its cd/m2).
+exposure::Mode exposure_mode(const FrameRequest& r);
 
 shading::RenderRequest render_request(const FrameRequest& r, const JobOptions& options);
 patterns::PatternOptions pattern_options(const FrameRequest& r);

@@ -209,6 +209,18 @@ Result<std::unique_ptr<FrameJob>> FrameJob::create(FrameRequest request, JobOpti
 
 // ---- render stage ----------------------------------------------------------------------
 
+namespace {
+
+// tone.max_frame_average_nits, once the exposure is final (a sequence's decision too).
+void limit_frame_average(FrameJob::State& st, const SceneInput& in, PreparedPipeline& p) {
+  apply_frame_average_limit(p, in);
+  if (p.frame_average_limit && !p.frame_average_limit->not_applied.empty())
+    st.warnings.push_back(fmt::format("tone.max_frame_average_nits {:g} is not applied: {}",
+                                      p.frame_average_limit->limit_nits, p.frame_average_limit->not_applied));
+}
+
+}  // namespace
+
 Result<void> FrameJob::render(shading::Renderer& renderer) {
   State& st = *s_;
   if (!needs_renderer()) return {};
@@ -258,7 +270,7 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
   meter.image = &r->metering_nits;
   meter.units = InputUnits::absolute;
   if (r->dominant_illuminance_lux > 0) meter.illuminance_lux = r->dominant_illuminance_lux;
-  settings->exposure.mode = exposure_mode(st.request, r->dominant_illuminance_lux > 0);
+  settings->exposure.mode = exposure_mode(st.request);
   // A scene's keyframed exposure (docs/scene-format.md "Keyframes"): its EV100 is the camera
   // exposure where the request leaves the mode to the rule and gives no EV100 of its own;
   // its compensation adds to the request's.
@@ -271,6 +283,7 @@ Result<void> FrameJob::render(shading::Renderer& renderer) {
   if (!prepared) return prepared.error();
   if (st.options.temporal)
     if (auto ok = st.options.temporal(meter, *prepared, {r->scene_cut, r->duration_s}); !ok) return ok.error();
+  limit_frame_average(st, meter, *prepared);
   st.settings = std::move(*settings);
   if (st.stopped()) return cancelled();
 
@@ -380,6 +393,7 @@ Result<EncodedFrame> finish_encode(FrameJob::State& st) {
   if (!prepared) return prepared.error();
   if (st.options.temporal)
     if (auto ok = st.options.temporal(in, *prepared, {}); !ok) return ok.error();
+  limit_frame_average(st, in, *prepared);
   auto f = encode_prepared(in, *prepared);
   if (!f) return f.error();
   st.timings["encode"] = ms_since(t1);

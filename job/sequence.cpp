@@ -121,11 +121,20 @@ video::SequenceMetadataSettings metadata_settings(const FrameRequest& r) {
   return s;
 }
 
+}  // namespace
+
 temporal::TemporalSettings temporal_settings(const FrameRequest& r) {
+  // adaptation_time_s, when given, sets both directions; a direction given itself wins;
+  // otherwise each direction's table default (the eye's fast adaptation to light, slow to
+  // the dark: Unreal's speed up 3 and down 1).
   exposure::Settings e;
-  e.adaptation_time_s = r.number("exposure.adaptation_time_s");
-  e.adaptation_brighten_time_s = r.optional_number("exposure.adaptation_brighten_time_s");
-  e.adaptation_darken_time_s = r.optional_number("exposure.adaptation_darken_time_s");
+  const std::optional<double> both = r.optional_number("exposure.adaptation_time_s");
+  auto direction = [&](std::string_view path) {
+    return r.has(path) || !both ? r.optional_number(path) : both;
+  };
+  e.adaptation_time_s = both.value_or(0);
+  e.adaptation_brighten_time_s = direction("exposure.adaptation_brighten_time_s");
+  e.adaptation_darken_time_s = direction("exposure.adaptation_darken_time_s");
   temporal::TemporalSettings t;
   t.adaptation = temporal::adaptation_settings(e);
   t.scene_cut.threshold_stops = r.number("sequence.cut_threshold_stops");
@@ -135,6 +144,8 @@ temporal::TemporalSettings temporal_settings(const FrameRequest& r) {
   t.peak.fall_time_s = r.number("tone.peak_fall_time_s");
   return t;
 }
+
+namespace {
 
 // Frames between the render/encode stage and the writer: push blocks while full, pop while
 // empty; close() ends both sides (an error on either).

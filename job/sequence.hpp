@@ -85,6 +85,11 @@ struct SequenceResult {
   nlohmann::json timings_ms = nlohmann::json::object();  // totals per stage
 };
 
+// The time axis a sequence request asks for (encode/tone/temporal.hpp): adaptation (both
+// directions from exposure.adaptation_time_s when given, a direction given itself wins,
+// else each direction's default), scene cuts, the dynamic peak.
+temporal::TemporalSettings temporal_settings(const FrameRequest& request);
+
 // Runs a sequence request (FrameRequest::sequence, source render or encode) into OUTBASE*.
 // `renderer`: the render requests' (made here when null). The EXR frames come from the
 // request's `images` setting.

@@ -104,6 +104,11 @@ std::vector<Setting> make_table() {
               "own RGB operator, the only way an RGB operator such as agx applies)",
        .choices = kApply,
        .default_doc = "the curve's", .flag = "--tonemap-apply", .metavar = "HOW", .query = "apply"},
+      {.path = "tone.max_frame_average_nits", .type = T::number, .sources = kSceneReferred,
+       .doc = "HDR outputs: hold the frame average of maxRGB at or below this by lowering the exposure (a display's "
+              "ABL budget, e.g. 400); not applied with the clip curve or to SDR outputs",
+       .unit = "cd/m2", .min = 1, .max = 10000, .default_doc = "none (off)", .flag = "--max-frame-average",
+       .metavar = "NITS", .query = "max_frame_average_nits"},
       {.path = "gamut", .type = T::choice, .sources = kSceneReferred,
        .doc = "Gamut mapping after tone mapping, from the input's gamut into the output's: ictcp (constant "
               "intensity and hue, chroma reduced to the boundary; desaturate is the same), clip (per channel), "
@@ -115,8 +120,8 @@ std::vector<Setting> make_table() {
 
       // ---- exposure (REFERENCE.md §1.2, RTR4 §8.2.2) ----
       {.path = "exposure.mode", .type = T::choice, .sources = kSceneReferred,
-       .doc = "Exposure: auto = camera when ev100 is given, light-based when the illuminance is known (a render's "
-              "lights, or illuminance_lux), histogram for renders without, manual for EXR input",
+       .doc = "Exposure: auto = camera when ev100 is given, light-based when illuminance_lux is given, histogram "
+              "(Unreal's window average) for renders, manual for EXR input",
        .choices = kExposureModes, .default_json = "\"auto\"", .flag = "--exposure-mode", .metavar = "MODE",
        .query = "exposure"},
       {.path = "exposure.compensation_ev", .type = T::number, .sources = kSceneReferred,
@@ -137,35 +142,49 @@ std::vector<Setting> make_table() {
       {.path = "exposure.iso", .type = T::number, .sources = kSceneReferred, .doc = "Camera ISO", .min = 1, .max = 1e7,
        .default_json = "100", .flag = "--iso", .metavar = "ISO", .query = "iso"},
       {.path = "exposure.percentile", .type = T::number, .sources = kSceneReferred,
-       .doc = "Histogram mode: the percentile metered", .unit = "%", .min = 0, .max = 100, .default_json = "50",
-       .flag = "--percentile", .metavar = "P", .query = "percentile"},
+       .doc = "Histogram mode: read this percentile of the window instead of its average in stops (50: Valve's "
+              "median)",
+       .unit = "%", .min = 0, .max = 100, .default_doc = "none: the window's average", .flag = "--percentile",
+       .metavar = "P", .query = "percentile"},
       {.path = "exposure.percentile_target", .type = T::number, .sources = kSceneReferred,
-       .doc = "Histogram mode: the relative value the percentile maps to", .min = 1e-6, .max = 1e4,
+       .doc = "Histogram mode: the relative value the window's average (or percentile) maps to", .min = 1e-6,
+       .max = 1e4,
        .default_json = "0.18", .flag = "--percentile-target", .metavar = "V", .query = "percentile_target"},
       {.path = "exposure.ignore_dark_fraction", .type = T::number, .sources = kSceneReferred,
-       .doc = "Histogram mode: fraction of the darkest pixels ignored", .min = 0, .max = 0.99, .default_json = "0",
+       .doc = "Histogram mode: fraction of the darkest pixels ignored (Unreal's low percent 80)", .min = 0,
+       .max = 0.99, .default_json = "0.8",
        .flag = "--ignore-dark", .metavar = "F", .query = "ignore_dark_fraction"},
       {.path = "exposure.ignore_bright_fraction", .type = T::number, .sources = kSceneReferred,
-       .doc = "Histogram mode: fraction of the brightest pixels ignored", .min = 0, .max = 0.99,
-       .default_json = "0.02", .flag = "--ignore-bright", .metavar = "F", .query = "ignore_bright_fraction"},
+       .doc = "Histogram mode: fraction of the brightest pixels ignored (Unreal's high percent 98.3)", .min = 0,
+       .max = 0.99, .default_json = "0.017", .flag = "--ignore-bright", .metavar = "F", .query = "ignore_bright_fraction"},
+      {.path = "exposure.min_ev100", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram and log-average modes: the darkest scene they expose for, as a camera EV100 (Unreal's min "
+              "EV100; a black frame stays black)",
+       .unit = "EV", .min = -30, .max = 40, .default_json = "-6", .flag = "--min-ev100", .metavar = "EV",
+       .query = "min_ev100"},
+      {.path = "exposure.max_ev100", .type = T::number, .sources = kSceneReferred,
+       .doc = "Histogram and log-average modes: the brightest scene they expose for, as a camera EV100 (Unreal's "
+              "max EV100)",
+       .unit = "EV", .min = -30, .max = 40, .default_json = "20", .flag = "--max-ev100", .metavar = "EV",
+       .query = "max_ev100"},
       {.path = "exposure.illuminance_lux", .type = T::number, .sources = kSceneReferred,
        .doc = "Light mode: the dominant illuminance", .unit = "lux", .min = 1e-6, .max = 1e7,
        .default_doc = "a render's dominant light", .flag = "--illuminance", .metavar = "LUX", .query = "illuminance_lux"},
 
       // ---- the time axis (sequences only: docs/sequences.md; RTR4 §8.2.2) ----
       {.path = "exposure.adaptation_time_s", .type = T::number, .sources = kSceneReferred,
-       .doc = "Sequences: time constant of exposure adaptation in stops, both directions (0: every frame from its "
-              "own metering; manual exposure never adapts)",
-       .unit = "s", .min = 0, .max = 1000, .default_json = "1", .flag = "--adaptation", .metavar = "S",
+       .doc = "Sequences: time constant of exposure adaptation in stops, both directions unless one is given (0: "
+              "every frame from its own metering; manual and camera exposure never adapt)",
+       .unit = "s", .min = 0, .max = 1000, .default_doc = "per direction", .flag = "--adaptation", .metavar = "S",
        .sequence = true},
       {.path = "exposure.adaptation_brighten_time_s", .type = T::number, .sources = kSceneReferred,
-       .doc = "Sequences: adaptation time constant while the exposure rises (into the dark)", .unit = "s", .min = 0,
-       .max = 1000, .default_doc = "exposure.adaptation_time_s", .flag = "--adaptation-brighten", .metavar = "S",
-       .sequence = true},
+       .doc = "Sequences: adaptation time constant while the exposure rises (into the dark; Unreal's speed down 1)",
+       .unit = "s", .min = 0, .max = 1000, .default_json = "1", .default_doc = "exposure.adaptation_time_s, else 1",
+       .flag = "--adaptation-brighten", .metavar = "S", .sequence = true},
       {.path = "exposure.adaptation_darken_time_s", .type = T::number, .sources = kSceneReferred,
-       .doc = "Sequences: adaptation time constant while the exposure falls (into the light)", .unit = "s", .min = 0,
-       .max = 1000, .default_doc = "exposure.adaptation_time_s", .flag = "--adaptation-darken", .metavar = "S",
-       .sequence = true},
+       .doc = "Sequences: adaptation time constant while the exposure falls (into the light; Unreal's speed up 3)",
+       .unit = "s", .min = 0, .max = 1000, .default_json = "0.333", .default_doc = "exposure.adaptation_time_s, else 0.333",
+       .flag = "--adaptation-darken", .metavar = "S", .sequence = true},
       {.path = "tone.dynamic_peak", .type = T::boolean, .sources = kSceneReferred,
        .doc = "Sequences: a curve that takes a source peak (bt2390's source_peak_nits) follows the frames' smoothed "
               "peak, and one that takes a scene average (source_avg_nits: spline, st2094-40, st2094-10) the smoothed "

@@ -54,4 +54,25 @@ if [ -x "$pictures" ]; then
 else
   echo "make-docs-pictures: $pictures not built (ninja bench_render_pictures): environment pictures skipped" >&2
 fi
+# Each built-in scene's default frame (docs/rendering.md, "Default frames"), 480x270, SDR and
+# the heatmap of its HDR10 display light, before and after renders metered their picture:
+# "before" is `--exposure-mode light` (the old default: white card under the dominant
+# light = 1.0), "after" the defaults. Prints each HDR10 sidecar's frame average and
+# percentiles (frame_light) as the table rows the doc shows.
+scenes=$("$hdrd" render --help | sed -n 's/.*A built-in scene (\([^)]*\)).*/\1/p' | tr -d ,)
+echo "| scene | exposure | mode, EV100 of its scale | frame average | 1 % | 10 % | 25 % | 50 % | 75 % | 90 % | 99 % | max |"
+for scene in $scenes; do
+  for when in before after; do
+    set -- --scene "$scene" --width 480 --height 270 -q
+    [ "$when" = before ] && set -- "$@" --exposure-mode light
+    "$hdrd" render "$@" --mode sdr --format png -o "$tmp/$scene-$when-sdr"
+    cp "$tmp/$scene-$when-sdr.png" "$img/scene-$scene-$when-sdr.png"
+    "$hdrd" render "$@" --mode hdr10 --format heatmap -o "$tmp/$scene-$when-hdr10"
+    cp "$tmp/$scene-$when-hdr10.heatmap.png" "$img/scene-$scene-$when-hdr10-heatmap.png"
+    jq -r --arg s "$scene" --arg w "$when" '.frame_light as $l | .settings.exposure as $e |
+      "| `\($s)` | \($w) | \($e.mode), EV100 \(1 / (1.2 * $e.scale) | log2 | . * 10 | round / 10) | \($l.frame_average_nits | . * 100 | round / 100) | " +
+      ([$l.percentiles_nits["1","10","25","50","75","90","99"]] | map(. * 100 | round / 100 | tostring) | join(" | ")) +
+      " | \($l.max_nits | round) |"' "$tmp/$scene-$when-hdr10.json"
+  done
+done
 ls -l "$img"

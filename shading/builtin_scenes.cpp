@@ -1,5 +1,7 @@
 // Built-in scenes that exercise the shading theory (RTR4 ch. 9); see docs/rendering.md.
+#include <cmath>
 #include <functional>
+#include <memory>
 
 #include <fmt/format.h>
 
@@ -162,6 +164,15 @@ Scene furnace() {
   Scene& s = b.scene();
   s.ambient_nits = Vec3{1000, 1000, 1000};
   s.camera = Camera{{3, 1, 8}, {3, 1, 0}, {0, 1, 0}, 40 * kPi / 180};
+  // A furnace is read against its light: the 1000 cd/m2 around it is diffuse white, a
+  // camera at EV100 log2(1000 / 1.2) = 9.70 (1 / (1.2 * 2^EV100) = 1/1000). A metering
+  // camera would map the uniform frame to mid grey and show the white spheres grey.
+  auto exposure = std::make_shared<SceneAnimation>();
+  Track ev;
+  ev.times_s = {0};
+  ev.values = {std::log2(1000 / 1.2)};
+  exposure->exposure_ev100 = ev;
+  s.animation = exposure;
   return s;
 }
 

@@ -360,6 +360,15 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
                               {"max_fall_nits", carried.max_fall_nits},
                               {"max_cll_nits_measured", frame.content_light.max_cll_nits},
                               {"max_fall_nits_measured", frame.content_light.max_fall_nits}};
+  // The frame's display light as sent (measure_frame_light: maxRGB of the decoded codes):
+  // its average (what MaxFALL and a display's ABL see) and distribution. HDR modes only.
+  if (t.is_hdr()) {
+    const FrameLight light = measure_frame_light(frame);
+    nlohmann::json pct = nlohmann::json::object();
+    for (double p : kFrameLightPercentiles) pct[fmt::format("{:g}", p)] = light.percentile_nits(p);
+    j["frame_light"] = {{"frame_average_nits", light.mean_nits}, {"max_nits", light.max_nits},
+                        {"percentiles_nits", pct}};
+  }
   j["files"] = files;
   j["settings"] = frame.settings.is_object() ? frame.settings : nlohmann::json::object();
   return j;

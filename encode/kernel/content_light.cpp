@@ -87,6 +87,17 @@ FrameLight measure_frame_light(const EncodedFrame& f) {
   return out;
 }
 
+double FrameLight::percentile_nits(double p) const {
+  if (pixels == 0) return 0.0;
+  const double rank = std::max(1.0, std::ceil(std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(pixels)));
+  std::uint64_t below = 0;
+  for (int i = 0; i < kPqBins; ++i) {
+    below += pq_counts[static_cast<std::size_t>(i)];
+    if (static_cast<double>(below) >= rank) return transfer::pq_eotf(static_cast<double>(i) / (kPqBins - 1));
+  }
+  return max_nits;
+}
+
 ContentLightLevel measure_content_light(const EncodedFrame& f) {
   const FrameLight light = measure_frame_light(f);
   return {light.max_nits, light.mean_nits};

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "encode/tone/scene_cut.hpp"
+
 namespace hdrd::exposure {
 
 std::string_view to_string(Mode m) {
@@ -50,7 +52,11 @@ Result<void> check_settings(const Settings& s) {
   if (!(s.aperture_f > 0 && s.aperture_f < 1000)) return bad("exposure.aperture", "aperture must be in (0, 1000)");
   if (!(s.shutter_s > 0 && s.shutter_s < 1e5)) return bad("exposure.shutter", "shutter time must be in (0, 1e5) s");
   if (!(s.iso > 0 && s.iso < 1e7)) return bad("exposure.iso", "ISO must be in (0, 1e7)");
-  if (!(s.percentile >= 0 && s.percentile <= 100)) return bad("exposure.percentile", "percentile must be in [0, 100]");
+  if (s.percentile && !(*s.percentile >= 0 && *s.percentile <= 100))
+    return bad("exposure.percentile", "percentile must be in [0, 100]");
+  if (!(std::isfinite(s.min_ev100) && std::isfinite(s.max_ev100) && s.min_ev100 <= s.max_ev100))
+    return bad("exposure.min_ev100",
+               fmt::format("exposure.min_ev100 {} must not be above exposure.max_ev100 {}", s.min_ev100, s.max_ev100));
   if (!(s.percentile_target > 0 && s.percentile_target < 1e4))
     return bad("exposure.percentile_target", "percentile target must be > 0");
   if (!(s.ignore_dark_fraction >= 0 && s.ignore_bright_fraction >= 0 &&
@@ -66,18 +72,46 @@ Result<void> check_settings(const Settings& s) {
   return {};
 }
 
-std::vector<float> finite_positive(std::span<const float> l) {
-  std::vector<float> v;
-  v.reserve(l.size());
-  for (float x : l)
-    if (std::isfinite(x)) v.push_back(std::max(x, 0.0f));
-  return v;
-}
-
 // A floor for metered luminance so a black frame does not produce an infinite gain.
 constexpr double kMinMeteredNits = 1e-4;
 
+// Unreal's clamp of a metered exposure: a camera's EV100 within [min, max].
+double clamp_metered_scale(const Settings& s, double scale, Metering& m) {
+  const double ev = std::clamp(ev100_from_scale(scale), s.min_ev100, s.max_ev100);
+  m.ev100 = ev;
+  return ev == ev100_from_scale(scale) ? scale : scale_from_ev100(ev);
+}
+
 }  // namespace
+
+double ev100_from_scale(double scale) { return std::log2(1.0 / (1.2 * scale)); }
+
+double histogram_window_nits(std::span<const float> luminance_nits, double dark, double bright,
+                             std::optional<double> percentile) {
+  const auto h = temporal::LuminanceHistogram::of(luminance_nits);
+  using H = temporal::LuminanceHistogram;
+  const double n = static_cast<double>(h.total());
+  if (n == 0) return 0.0;
+  const double lo = dark * n, hi = std::max((1.0 - bright) * n, lo);
+  if (percentile) return h.percentile(100.0 * (lo + *percentile / 100.0 * (hi - lo)) / n);
+  // The window's mean in stops, each bin at its centre (black and the darkest bins at the
+  // metering floor); a window of zero width reads the bin it falls in.
+  const double floor_log2 = std::log2(kMinMeteredNits);
+  double below = 0, weight = 0, sum = 0;
+  for (int i = 0; i < H::kBins; ++i) {
+    const double c = h.counts()[static_cast<std::size_t>(i)];
+    if (c == 0) continue;
+    const double w = hi > lo ? std::max(0.0, std::min(below + c, hi) - std::max(below, lo))
+                             : (lo >= below && lo <= below + c ? 1.0 : 0.0);
+    below += c;
+    if (w <= 0) continue;
+    const double centre = i == 0 ? floor_log2 : std::log2(H::lower_edge(i)) + 0.5 / H::kBinsPerStop;
+    sum += w * std::max(centre, floor_log2);
+    weight += w;
+    if (hi <= lo) break;
+  }
+  return weight > 0 ? std::exp2(sum / weight) : 0.0;
+}
 
 Result<Metering> meter(const Settings& s, std::span<const float> luminance_nits, double paper_white_nits) {
   if (auto ok = check_settings(s); !ok) return ok.error();
@@ -107,21 +141,18 @@ Result<Metering> meter(const Settings& s, std::span<const float> luminance_nits,
       }
       if (n == 0) return make_error("exposure.empty", "log-average metering found no finite pixels", "exposure.mode");
       m.metered = std::max(std::exp(sum / n), kMinMeteredNits);
-      m.scale = kMidGrey / m.metered;
+      m.scale = clamp_metered_scale(s, kMidGrey / m.metered, m);
       break;
     }
     case Mode::histogram: {
-      std::vector<float> v = finite_positive(luminance_nits);
-      if (v.empty()) return make_error("exposure.empty", "histogram metering found no finite pixels", "exposure.mode");
-      // Drop the darkest and brightest fractions, then take the percentile of what is left
-      // (Valve: median -> mid grey; a few bright pixels cannot move it).
-      const double n = static_cast<double>(v.size());
-      const double lo = s.ignore_dark_fraction * n;
-      const double kept = n * (1.0 - s.ignore_dark_fraction - s.ignore_bright_fraction);
-      auto idx = static_cast<std::size_t>(std::clamp(lo + s.percentile / 100.0 * std::max(kept - 1, 0.0), 0.0, n - 1));
-      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(idx), v.end());
-      m.metered = std::max<double>(v[idx], kMinMeteredNits);
-      m.scale = s.percentile_target / m.metered;
+      // Unreal's histogram exposure: drop the darkest and brightest fractions, average the
+      // rest in stops (or read a percentile of it: Valve's median); a few bright pixels
+      // (the sun, a chrome ball's highlight) cannot move it.
+      const double w = histogram_window_nits(luminance_nits, s.ignore_dark_fraction, s.ignore_bright_fraction, s.percentile);
+      if (!(w > 0) && std::none_of(luminance_nits.begin(), luminance_nits.end(), [](float x) { return std::isfinite(x); }))
+        return make_error("exposure.empty", "histogram metering found no finite pixels", "exposure.mode");
+      m.metered = std::max(w, kMinMeteredNits);
+      m.scale = clamp_metered_scale(s, s.percentile_target / m.metered, m);
       break;
     }
     case Mode::light: {

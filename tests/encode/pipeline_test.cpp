@@ -10,6 +10,7 @@
 #include "encode/pipeline.hpp"
 #include "encode/kernel/pipeline_internal.hpp"
 #include "encode/colour/transfer.hpp"
+#include "tests/testing/standards.hpp"
 
 using namespace hdrd;
 using color::Vec3;
@@ -556,5 +557,83 @@ TEST(SceneLuminance, HalfAndFloatInputGiveTheSameSamples) {
       EXPECT_EQ(a[k], b[k]) << "sample " << k << " step " << step;
       EXPECT_NEAR(a[k], want, 1e-5 * want + 1e-9) << "sample " << k << " step " << step;
     }
+  }
+}
+
+// tone.max_frame_average_nits: the encoded frame's average maxRGB, decoded here from its PQ
+// codes with ST 2084's EOTF (tests/testing/standards.hpp), is held at the limit (a display's
+// ABL budget) by a lower exposure; `clip` (exact levels) and SDR outputs are left alone.
+namespace {
+
+Image bright_yard(int w, int h) {
+  Image img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float* p = img.rgba.data() + (static_cast<std::size_t>(y) * w + x) * 4;
+      // A sky at 8x diffuse white over a ramp of sunlit ground 0.05-2, a little colour.
+      const double v = y < h / 2 ? 8.0 : 0.05 + 1.95 * x / (w - 1);
+      p[0] = static_cast<float>(v), p[1] = static_cast<float>(v * 0.9), p[2] = static_cast<float>(v * 1.1), p[3] = 1;
+    }
+  return img;
+}
+
+double decoded_frame_average(const EncodedFrame& f) {
+  double sum = 0;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x) {
+      const auto c = codes_at(f, x, y);
+      sum += hdrd::testing::standard::pq_eotf(std::max({c[0], c[1], c[2]}) / 1023.0);
+    }
+  return sum / (static_cast<double>(f.width) * f.height);
+}
+
+EncodedFrame encode_limited(const Image& img, EncodeSettings s, std::optional<FrameAverageLimit>* decided = nullptr) {
+  SceneInput in;
+  in.image = &img;
+  auto p = prepare_pipeline(in, s);
+  EXPECT_TRUE(p.ok()) << (p.ok() ? "" : p.error().message);
+  apply_frame_average_limit(*p, in);
+  if (decided) *decided = p->frame_average_limit;
+  auto f = encode_prepared(in, *p);
+  EXPECT_TRUE(f.ok());
+  return std::move(f).value();
+}
+
+}  // namespace
+
+TEST(Encode, FrameAverageLimitHoldsTheDecodedAverage) {
+  for (auto [w, h] : {std::pair{64, 36}, std::pair{256, 144}}) {  // every pixel sampled; every other one
+    const Image img = bright_yard(w, h);
+    EncodeSettings s = settings(Mode::hdr10, "");  // the mode's default curve
+    const double free_average = decoded_frame_average(encode(img, s));
+    ASSERT_GT(free_average, 500) << "the test frame must be above the limit without it";
+    s.tone.max_frame_average_nits = 400;
+    std::optional<FrameAverageLimit> d;
+    const double limited = decoded_frame_average(encode_limited(img, s, &d));
+    ASSERT_TRUE(d && d->applied);
+    EXPECT_LE(limited, 400 * 1.01) << w;
+    EXPECT_GE(limited, 400 * 0.97) << w << ": lowered only as far as needed";
+    EXPECT_LT(d->exposure_factor, 1);
+    EXPECT_NEAR(d->predicted_nits, free_average, 0.01 * free_average);
+    // Below the limit: nothing changes.
+    s.tone.max_frame_average_nits = 2 * free_average;
+    const EncodedFrame same = encode_limited(img, s, &d);
+    EXPECT_FALSE(d->applied);
+    EXPECT_EQ(same.data, encode(img, settings(Mode::hdr10, "")).data);
+  }
+}
+
+TEST(Encode, FrameAverageLimitLeavesClipAndSdrExact) {
+  const Image img = bright_yard(64, 36);
+  for (auto [mode, curve] : {std::pair{Mode::hdr10, "clip"}, std::pair{Mode::sdr, ""}}) {
+    EncodeSettings s = settings(mode, curve);
+    const EncodedFrame free = encode(img, s);
+    s.tone.max_frame_average_nits = 100;
+    std::optional<FrameAverageLimit> d;
+    const EncodedFrame limited = encode_limited(img, s, &d);
+    ASSERT_TRUE(d);
+    EXPECT_FALSE(d->applied) << curve;
+    EXPECT_FALSE(d->not_applied.empty());
+    EXPECT_EQ(limited.data, free.data) << "levels stay exact";
   }
 }

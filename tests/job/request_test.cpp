@@ -474,5 +474,18 @@ TEST(Request, AcceptedNamesNeverShareAFile) {
   EXPECT_NE(std::find(accepted.begin(), accepted.end(), "a.0001"), accepted.end()) << "4 digits are no frame number";
 }
 
+// Patterns are exact display levels: the frame-average limit (a scene-referred exposure
+// setting) is refused there, by name, and never reaches the encoder.
+TEST(Request, FrameAverageLimitIsRefusedForPatterns) {
+  auto p = parse(R"({"pattern":"window","tone":{"max_frame_average_nits":400}})", Source::pattern);
+  ASSERT_FALSE(p.ok());
+  EXPECT_EQ(p.error().code, "request.unknown_field");
+  EXPECT_EQ(p.error().field, "tone.max_frame_average_nits");
+  auto r = parse(R"({"tone":{"max_frame_average_nits":400}})", Source::render);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->optional_number("tone.max_frame_average_nits"), 400);
+  EXPECT_FALSE(parse(R"({"tone":{"max_frame_average_nits":0}})", Source::render).ok()) << "at least 1 cd/m2";
+}
+
 }  // namespace
 }  // namespace hdrd::job

@@ -6,6 +6,7 @@
 // nothing on errors, and every sequence setting read.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -145,6 +146,47 @@ TEST(SequenceRequest, SequenceSettingsExistOnlyInSequences) {
 }
 
 // ---- the time axis -----------------------------------------------------------------------
+
+// Defaults from the settings table: the exposure falls into the light three times faster
+// than it rises into the dark (Unreal's speed up 3, down 1; the eye adapts to light in
+// seconds, to the dark far slower), each an exponential in stops solved exactly per frame
+// interval, so 24 and 48 fps give the same exposure after the same time. The reference is
+// the closed form log2 S(t) = log2 T + (log2 S0 - log2 T) exp(-(t - t0) / tau), computed here.
+TEST(SequenceRequest, AdaptationDefaultsDifferByDirectionAndIgnoreTheFrameRate) {
+  const temporal::TemporalSettings t = temporal_settings(parse(json::object(), Source::render, true));
+  EXPECT_DOUBLE_EQ(t.adaptation.brighten_time_s, 1.0);
+  EXPECT_NEAR(t.adaptation.darken_time_s, 1.0 / 3, 1e-3);
+  const auto both = temporal_settings(parse(json{{"exposure", {{"adaptation_time_s", 2}}}}, Source::render, true));
+  EXPECT_EQ(both.adaptation.brighten_time_s, 2.0);
+  EXPECT_EQ(both.adaptation.darken_time_s, 2.0);
+  const auto one = temporal_settings(
+      parse(json{{"exposure", {{"adaptation_time_s", 2}, {"adaptation_darken_time_s", 0.5}}}}, Source::render, true));
+  EXPECT_EQ(one.adaptation.brighten_time_s, 2.0);
+  EXPECT_EQ(one.adaptation.darken_time_s, 0.5);
+
+  // A step of the metered scale at t0 = 0.5 s (on both frame grids), read at t = 1.5 s.
+  const double s0 = 1.0, s1 = 1.0 / 64, t0 = 0.5, t_end = 1.5;
+  auto adapted = [&](double fps, double from, double to) {
+    temporal::ExposureAdaptation a(t.adaptation);
+    double v = 0;
+    const int frames = static_cast<int>(std::lround(t_end * fps));
+    for (int k = 0; k <= frames; ++k) v = *a.next(k < std::lround(t0 * fps) ? from : to, 1.0 / fps, k == 0);
+    return std::log2(v);
+  };
+  auto closed_form = [&](double from, double to, double tau) {
+    return std::log2(to) + (std::log2(from) - std::log2(to)) * std::exp(-(t_end - t0) / tau);
+  };
+  const double into_light = closed_form(s0, s1, t.adaptation.darken_time_s);
+  const double into_dark = closed_form(s1, s0, t.adaptation.brighten_time_s);
+  for (double fps : {24.0, 48.0}) {
+    EXPECT_NEAR(adapted(fps, s0, s1), into_light, 1e-9) << fps << " fps, into the light";
+    EXPECT_NEAR(adapted(fps, s1, s0), into_dark, 1e-9) << fps << " fps, into the dark";
+  }
+  EXPECT_NEAR(adapted(24, s0, s1), adapted(48, s0, s1), 1e-9);
+  // 1 s after the step: 95 % of the 6 stops into the light, 63 % into the dark.
+  EXPECT_NEAR((std::log2(s0) - into_light) / 6, 1 - std::exp(-3.0), 2e-3);
+  EXPECT_NEAR((into_dark - std::log2(s1)) / 6, 1 - std::exp(-1.0), 1e-9);
+}
 
 TEST(Sequence, ManualExposureGivesEachFrameItsSingleFrameEncode) {
   testing::TempDir d;
@@ -348,6 +390,29 @@ TEST(Sequence, EverySequenceSettingIsRead) {
     if (s.sequence && s.takes(Source::encode)) {
       EXPECT_TRUE(req->read.count(s.path)) << s.path << " is never read";
     }
+}
+
+// The hdr scene's walk from the dim room into the sunlit yard, with every default: the
+// exposure follows the picture (histogram metering, adaptation on), so it falls by stops
+// over the walk instead of staying the sun's. 7 frames of 32x18 at 1 fps.
+TEST(SequenceRender, HdrWalkAdaptsWithDefaults) {
+  testing::TempDir d;
+  json body = {{"scene", "hdr"}, {"width", 32}, {"height", 18}, {"samples", 1}, {"fps", 1}, {"formats", {"raw"}}};
+  auto r = parse_request_json(body, context(Source::render, true));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  auto seq = run_sequence(*r, d / "out", {});
+  if (!seq.ok() && seq.error().code.rfind("render", 0) == 0) GTEST_SKIP() << "no GL renderer: " << seq.error().message;
+  ASSERT_TRUE(seq.ok()) << seq.error().message;
+  const json& frames = seq->sidecar["frames"];
+  ASSERT_EQ(frames.size(), 7u) << "6 s at 1 fps, both ends";
+  double lo = 1e300, hi = 0;
+  for (const auto& f : frames) {
+    const double k = f["exposure_scale"].get<double>();
+    lo = std::min(lo, k), hi = std::max(hi, k);
+  }
+  EXPECT_GT(std::log2(hi / lo), 3.0) << frames.dump();
+  EXPECT_LT(frames[6]["exposure_scale"].get<double>(), frames[0]["exposure_scale"].get<double>() / 8)
+      << "out in the yard, at least 3 stops less exposure than in the room";
 }
 
 }  // namespace

@@ -497,7 +497,7 @@ TEST(AnimatedRender, JsonKeyframedExposureIsReported) {
   EXPECT_TRUE(cut->scene_cut);
   // A still scene reports no exposure and no length.
   RenderRequest still;
-  still.scene = "furnace";
+  still.scene = "underwater";
   still.width = kW;
   still.height = kH;
   still.samples = 1;
@@ -505,6 +505,15 @@ TEST(AnimatedRender, JsonKeyframedExposureIsReported) {
   ASSERT_TRUE(s.ok());
   EXPECT_FALSE(s->exposure_ev100);
   EXPECT_EQ(s->duration_s, 0.0);
+  // The furnace is still but carries its exposure: its 1000 cd/m2 is diffuse white,
+  // 1 / (1.2 * 2^EV100) = 1/1000.
+  RenderRequest furnace = still;
+  furnace.scene = "furnace";
+  auto f = renderer.render(furnace);
+  ASSERT_TRUE(f.ok());
+  ASSERT_TRUE(f->exposure_ev100);
+  EXPECT_NEAR(1.0 / (1.2 * std::exp2(*f->exposure_ev100)), 1e-3, 1e-12);
+  EXPECT_EQ(f->duration_s, 0.0);
   still.time_s = NAN;
   EXPECT_EQ(renderer.render(still).error().code, "render.time_s");
 }

@@ -44,7 +44,7 @@ void run(const SheetOptions& o) {
   target->bits = 8;
   auto settings = job::encode_settings(*request, *target, static_cast<int>(request->integer("threads")), &notes);
   if (!settings) throw HdrdError(settings.error());
-  settings->exposure.mode = job::exposure_mode(*request, request->has("exposure.illuminance_lux"));
+  settings->exposure.mode = job::exposure_mode(*request);
   const EncodeSettings base = *settings;
   const bool gamut_maps = o.layout == "gamut-maps";
   if (!gamut_maps && request->has("tone.curve")) notes.push_back("--tonemap is ignored: the sheet shows every curve");
