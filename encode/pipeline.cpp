@@ -65,7 +65,8 @@ Vec3 gamut_map(Vec3 working_nits, const DisplayTarget& t, GamutMapping g, const 
   const Vec3 c = to_c * working_nits;
   if (t.mode == Mode::scrgb) return c;
   const double peak = t.peak_nits;
-  if (mapper) return fit_volume(mapper->map(working_nits), t, GamutMapping::ictcp);
+  if (mapper)
+    return fit_volume(mapper->map(working_nits), t, g == GamutMapping::clip ? GamutMapping::clip : GamutMapping::ictcp);
   if (in_cube(c, peak, kGamutTolerance) || g == GamutMapping::clip) return fit_volume(c, t, g);
   return fit_volume(gamut::desaturate(working_nits, to_c, peak), t, g);
 }
@@ -83,13 +84,27 @@ Mat3 source_gamut(const Mat3& input_to_working) {
 }
 }  // namespace
 
+std::optional<color::Primaries> display_gamut(const DisplayTarget& t) {
+  if (!t.display_primaries || t.mode == Mode::scrgb) return std::nullopt;
+  const Mat3 to_c = color::rgb_to_rgb(*t.display_primaries, t.container());
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k)
+      if (to_c.m[r][k] < -1e-6) return std::nullopt;
+  return t.display_primaries;
+}
+
 std::shared_ptr<const gamut::Mapper> cached_gamut_mapper(GamutMapping g, const Mat3& input_to_working,
-                                                         const DisplayTarget& t) {
-  if (g == GamutMapping::ictcp || g == GamutMapping::clip || t.mode == Mode::scrgb) return nullptr;
+                                                         const DisplayTarget& t, bool to_display) {
+  const std::optional<color::Primaries> display = to_display ? display_gamut(t) : std::nullopt;
+  if ((g == GamutMapping::ictcp || g == GamutMapping::clip) && !display) return nullptr;
+  if (t.mode == Mode::scrgb) return nullptr;
   static std::mutex mu;
   static std::vector<std::pair<std::string, std::shared_ptr<const gamut::Mapper>>> cache;
   const Mat3 src = source_gamut(input_to_working);
   std::string key = fmt::format("{}|{:.17g}|{}", static_cast<int>(g), t.peak_nits, t.container().red.x);
+  if (display)
+    for (const auto& c : {display->red, display->green, display->blue, display->white})
+      key += fmt::format("|d{:.17g},{:.17g}", c.x, c.y);
   for (const auto& row : src.m)
     for (double v : row) key += fmt::format("|{:.17g}", v);
   {
@@ -97,7 +112,8 @@ std::shared_ptr<const gamut::Mapper> cached_gamut_mapper(GamutMapping g, const M
     for (const auto& [k, v] : cache)
       if (k == key) return v;
   }
-  auto m = std::make_shared<const gamut::Mapper>(g, src, t.container(), t.peak_nits, kGamutTolerance);
+  auto m = display ? std::make_shared<const gamut::Mapper>(g, src, *display, t.peak_nits, kGamutTolerance, t.container())
+                   : std::make_shared<const gamut::Mapper>(g, src, t.container(), t.peak_nits, kGamutTolerance);
   std::lock_guard lock(mu);
   if (cache.size() >= 8) cache.erase(cache.begin());
   cache.emplace_back(key, m);
@@ -618,7 +634,7 @@ Result<PreparedPipeline> prepare_pipeline(const SceneInput& in, const EncodeSett
   p.unit_nits = unit_nits;
   p.luminance_nits = std::move(samples);
   p.scene_scale = unit_nits * m->scale;
-  p.gamut_mapper = detail::cached_gamut_mapper(s.gamut, in.to_working, t);
+  p.gamut_mapper = detail::cached_gamut_mapper(s.gamut, in.to_working, t, s.gamut_to_display);
   return p;
 }
 
@@ -649,6 +665,7 @@ nlohmann::json PreparedPipeline::describe() const {
     if (!l->not_applied.empty()) j["exposure"]["frame_average_limit"]["not_applied"] = l->not_applied;
   }
   j["gamut_mapping"] = to_string(settings.gamut);
+  if (settings.gamut_to_display) j["gamut_target"] = detail::display_gamut(settings.target) ? "display" : "container";
   j["dither"] = settings.dither;
   if (settings.grade) j["grade"] = settings.grade->describe();
   if (settings.ui.overlay)

@@ -63,6 +63,9 @@ struct EncodeSettings {
   exposure::Settings exposure;
   ToneSettings tone;
   GamutMapping gamut = GamutMapping::ictcp;
+  // Map into the display's own primaries (target.display_primaries, from its EDID) where
+  // they lie inside the container, instead of the container's.
+  bool gamut_to_display = false;
   UiSettings ui;
   std::shared_ptr<const grade::Grade> grade;
   bool dither = false;                     // ordered dither on code values (off in tests)

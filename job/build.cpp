@@ -157,6 +157,7 @@ Result<EncodeSettings> encode_settings(const FrameRequest& r, const DisplayTarge
   s.threads = threads;
   s.dither = r.boolean("dither");
   s.gamut = *parse_gamut_mapping(r.text("gamut"));
+  s.gamut_to_display = r.text("gamut_target") == "display";
   s.tone.curve = r.text("tone.curve");
   for (const auto& [k, v] : r.at("tone.params").items()) s.tone.params[k] = v.get<double>();
   if (const std::string apply = r.text("tone.apply"); !apply.empty()) s.tone.apply = tonemap::parse_apply(apply);

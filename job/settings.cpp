@@ -21,6 +21,7 @@ constexpr std::string_view kSdrCurves[] = {"srgb", "gamma22"};
 constexpr std::string_view kSdrEotfs[] = {"srgb", "gamma22", "bt1886"};
 constexpr std::string_view kApply[] = {"per-channel", "max-rgb", "luminance", "rgb"};
 constexpr const auto& kGamut = kGamutMappingNames;
+constexpr std::string_view kGamutTargets[] = {"container", "display"};
 constexpr std::string_view kExposureModes[] = {"auto", "manual", "camera", "log-average", "histogram", "light"};
 constexpr std::string_view kBlend[] = {"linear", "srgb"};
 constexpr std::string_view kPlacement[] = {"scene", "display", "baked"};
@@ -117,6 +118,11 @@ std::vector<Setting> make_table() {
               "is outside): docs/encoding.md",
        .choices = kGamut,
        .default_json = "\"ictcp\"", .flag = "--gamut", .metavar = "HOW", .query = "gamut"},
+      {.path = "gamut_target", .type = T::choice, .sources = kSceneReferred,
+       .doc = "The gamut mapped into: container (the signal's primaries) or display (the display's own primaries "
+              "from its EDID or profile, when they lie inside the container; else the container)",
+       .choices = kGamutTargets, .default_json = "\"container\"", .flag = "--gamut-target", .metavar = "WHERE",
+       .query = "gamut_target"},
 
       // ---- exposure (REFERENCE.md §1.2, RTR4 §8.2.2) ----
       {.path = "exposure.mode", .type = T::choice, .sources = kSceneReferred,

@@ -60,8 +60,11 @@ Vec3 desaturate(Vec3 working_nits, const Mat3& to_c, double peak) {
 }
 
 Mapper::Mapper(GamutMapping g, const Mat3& source_to_working, const color::Primaries& target, double peak_nits,
-               double tolerance)
+               double tolerance, std::optional<color::Primaries> container)
     : g_(g), peak_(peak_nits), tol_(tolerance), i_peak_(transfer::pq_inverse_eotf(peak_nits)) {
+  if (container)
+    to_container_ = g == GamutMapping::absolute ? color::xyz_to_rgb(*container) * color::rgb_to_xyz(target)
+                                                : color::rgb_to_rgb(target, *container);
   w2t_ = g == GamutMapping::absolute ? color::xyz_to_rgb(target) * color::rgb_to_xyz(color::kRec2020)
                                      : color::rgb_to_rgb(color::kRec2020, target);
   t2w_ = color::inverse(w2t_);
@@ -76,7 +79,8 @@ Mapper::Mapper(GamutMapping g, const Mat3& source_to_working, const color::Prima
   }
   const bool global = g == GamutMapping::perceptual || g == GamutMapping::saturation ||
                       g == GamutMapping::linear || g == GamutMapping::darken;
-  keeps_inside_ = !global || source_fits;
+  local_ = !global;
+  keeps_inside_ = (!global || source_fits) && !container;
   source_fits_ = source_fits;
   if (g == GamutMapping::darken && !source_fits) {
     // The source's primaries and secondaries at the peak, in the target: the largest channel.
@@ -179,10 +183,15 @@ Vec3 Mapper::clip_toward(Lch c, double ti) const {
 Vec3 Mapper::finish(Vec3 working) const { return clamp_to(w2t_ * working, peak_); }
 
 Vec3 Mapper::map(Vec3 working_nits) const {
+  const Vec3 t = map_to_target(working_nits);
+  return to_container_ ? *to_container_ * t : t;
+}
+
+Vec3 Mapper::map_to_target(Vec3 working_nits) const {
   const Vec3 direct = w2t_ * working_nits;
   const bool fits = in_cube(direct, peak_, tol_);
   if (g_ == GamutMapping::clip) return clamp_to(direct, peak_);
-  if (fits && keeps_inside_) return clamp_to(direct, peak_);
+  if (fits && (keeps_inside_ || local_)) return clamp_to(direct, peak_);
   if (g_ == GamutMapping::ictcp) return desaturate(working_nits, w2t_, peak_);
   build_tables();
   const Vec3 ictcp = color::rec2020_nits_to_ictcp(positive(working_nits));

@@ -59,9 +59,12 @@ color::Vec3 desaturate(color::Vec3 working_nits, const color::Mat3& to_target, d
 
 class Mapper {
  public:
+  // container: when given, the target is a display's gamut inside that signal container
+  // (an EDID's primaries): map() returns the container's RGB of the mapped colour, and every
+  // colour goes through map() (inside the container is not inside the display).
   Mapper(GamutMapping g, const color::Mat3& source_to_working, const color::Primaries& target, double peak_nits,
-         double tolerance = kDefaultTolerance);
-  // Working light -> target RGB light inside [0, peak]^3.
+         double tolerance = kDefaultTolerance, std::optional<color::Primaries> container = std::nullopt);
+  // Working light -> target RGB light inside [0, peak]^3 (the container's RGB of it with a container).
   color::Vec3 map(color::Vec3 working_nits) const;
   // True when colours already inside the target come back as working_to_target() of them
   // (so only the colours outside need map()): clip, ictcp, relative, absolute, highlight,
@@ -84,13 +87,15 @@ class Mapper {
   double cusp_intensity(double h) const;
   color::Vec3 clip_toward(Lch c, double target_i) const;  // largest s on (target_i + s (I - target_i), s C)
   color::Vec3 finish(color::Vec3 working) const;          // -> target RGB, clamped
-  void build_tables() const;                              // once, on the first colour that needs them
+  void build_tables() const;
+  color::Vec3 map_to_target(color::Vec3 working_nits) const;                              // once, on the first colour that needs them
 
   GamutMapping g_;
   color::Mat3 w2t_, t2w_, w2s_;
   double peak_, tol_, i_peak_;
   bool keeps_inside_ = true;
-  bool source_fits_ = false;
+  bool source_fits_ = false, local_ = true;  // local_: colours inside the target are kept
+  std::optional<color::Mat3> to_container_;
   double light_gain_ = 1;
   // Boundary chroma of the target and the source on a grid of kI intensities x kH hues,
   // each hue's cusp intensity (target) and linear's chroma scale: built by build_tables()

@@ -121,7 +121,9 @@ color::Vec3 gamut_map(color::Vec3 working_nits, const DisplayTarget& t, GamutMap
 // The prepared map of the family (gamut_map.hpp) from the input's gamut into the container
 // (cached: its tables take ~0.2 s), null for ictcp, clip and scrgb.
 std::shared_ptr<const gamut::Mapper> cached_gamut_mapper(GamutMapping g, const color::Mat3& input_to_working,
-                                                         const DisplayTarget& t);
+                                                         const DisplayTarget& t, bool to_display = false);
+// The display's own gamut when it is known and lies inside the container (gamut_target display).
+std::optional<color::Primaries> display_gamut(const DisplayTarget& t);
 // A map that moves colours inside the container too (perceptual, saturation, linear, darken
 // from a source wider than the container): every pixel goes through it, none through the
 // fused kernel or the GPU program.

@@ -294,6 +294,70 @@ INSTANTIATE_TEST_SUITE_P(Maps, GamutFastVsReference, ::testing::ValuesIn(gamut_c
   return std::string(to_string(i.param.mode)) + "_" + std::string(to_string(i.param.gamut));
 });
 
+// gamut_target display: the map's target is the display's own gamut (an EDID's primaries,
+// here SNYB905's with its white at (0.283, 0.298)) inside the Rec.2020 container. Every
+// pixel's container light, taken to the display's RGB (its matrix written out from the
+// primaries, adapted to D65 as the maps but absolute read it), lies in [0, peak]; with the
+// container as the target some do not; the fast path matches the reference.
+TEST(Encode, GamutTargetDisplayMapsIntoTheEdidsPrimaries) {
+  const color::Primaries sony{{0.625, 0.33984375}, {0.2802734375, 0.5947265625}, {0.1552734375, 0.0703125},
+                              {0.283203125, 0.2978515625}};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> lg(-2, 1.2);
+  Image img(64, 16);
+  for (std::size_t i = 0; i < img.pixel_count(); ++i) {
+    for (int c = 0; c < 3; ++c) img.rgba[i * 4 + c] = static_cast<float>(std::pow(10.0, lg(rng)) * (rng() % 3 == 0 ? 0 : 1));
+    img.rgba[i * 4 + 3] = 1;
+  }
+  SceneInput in;
+  in.image = &img;
+  in.to_working = color::Mat3::identity();
+  // The display's RGB from Rec.2020 light: XYZ -> display (RP 177), Bradford D65 -> its white.
+  auto npm = [](const color::Primaries& p) {
+    auto xyz = [](color::Chromaticity c) { return Vec3{c.x / c.y, 1.0, (1 - c.x - c.y) / c.y}; };
+    const Vec3 r = xyz(p.red), g = xyz(p.green), b = xyz(p.blue);
+    const color::Mat3 m{{{{r.x, g.x, b.x}, {r.y, g.y, b.y}, {r.z, g.z, b.z}}}};
+    const Vec3 s = color::inverse(m) * xyz(p.white);
+    return color::Mat3{{{{r.x * s.x, g.x * s.y, b.x * s.z}, {r.y * s.x, g.y * s.y, b.y * s.z}, {r.z * s.x, g.z * s.y, b.z * s.z}}}};
+  };
+  const color::Mat3 k{{{{0.8951, 0.2664, -0.1614}, {-0.7502, 1.7135, 0.0367}, {0.0389, -0.0685, 1.0296}}}};
+  auto lms = [&](color::Chromaticity c) { return k * Vec3{c.x / c.y, 1.0, (1 - c.x - c.y) / c.y}; };
+  const Vec3 from = lms(color::kD65), to = lms(sony.white);
+  const color::Mat3 scale{{{{to.x / from.x, 0, 0}, {0, to.y / from.y, 0}, {0, 0, to.z / from.z}}}};
+  const color::Mat3 to_display = color::inverse(npm(sony)) * (color::inverse(k) * scale * k) * npm(color::kRec2020);
+  for (GamutMapping g : {GamutMapping::ictcp, GamutMapping::relative, GamutMapping::perceptual}) {
+    int outside_container_target = 0;
+    for (bool display : {false, true}) {
+      auto s = settings(Mode::hdr10, "pq-shoulder");
+      s.target.display_primaries = sony;
+      s.gamut = g;
+      s.gamut_to_display = display;
+      auto p = prepare_pipeline(in, s);
+      ASSERT_TRUE(p.ok());
+      auto f = encode_prepared(in, *p);
+      ASSERT_TRUE(f.ok());
+      double worst = 0;
+      int worst_code = 0;
+      for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+          const float* px = img.px(x, y);
+          const Vec3 c = reference_display_nits(*p, {px[0], px[1], px[2]});
+          const Vec3 d = to_display * c;
+          const double out = std::max({-d.x, -d.y, -d.z, d.x - 1000, d.y - 1000, d.z - 1000});
+          worst = std::max(worst, out);
+          if (!display && out > 1) ++outside_container_target;
+          const Vec3 e = reference_signal(s.target, c);
+          const auto got = codes_at(*f, x, y);
+          for (int ch = 0; ch < 3; ++ch)
+            worst_code = std::max(worst_code, std::abs(got[ch] - static_cast<int>(std::clamp(e[ch], 0.0, 1.0) * 1023 + 0.5)));
+        }
+      EXPECT_LE(worst_code, 1) << to_string(g) << (display ? " display" : " container");
+      if (display) EXPECT_LE(worst, 1e-3) << to_string(g) << ": outside the display's gamut";
+    }
+    EXPECT_GT(outside_container_target, 0) << to_string(g) << ": the container target leaves the display's gamut";
+  }
+}
+
 TEST(Encode, GamutMapsOfASourceThatFitsChangeNothing) {
   // Rec.709 input into the Rec.709 SDR container: nothing to compress, every map is ictcp.
   Image img(3, 1);
