@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "daemon/connections.hpp"
+#include "daemon/http/connections.hpp"
 #include "job/request.hpp"
 
 namespace hdrd::daemon {

@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "daemon/http_server.hpp"
-#include "daemon/scheduler.hpp"
+#include "daemon/http/server.hpp"
+#include "daemon/jobs/scheduler.hpp"
 
 namespace hdrd::daemon {
 

@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "daemon/render_worker.hpp"
+#include "daemon/jobs/render_worker.hpp"
 
 namespace fs = std::filesystem;
 

@@ -12,11 +12,11 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon/config.hpp"
-#include "daemon/dump_dir.hpp"
-#include "daemon/http_server.hpp"
-#include "daemon/jobs.hpp"
+#include "daemon/jobs/dump_dir.hpp"
+#include "daemon/http/server.hpp"
+#include "daemon/jobs/jobs.hpp"
 #include "daemon/metrics.hpp"
-#include "daemon/scheduler.hpp"
+#include "daemon/jobs/scheduler.hpp"
 #include "job/settings.hpp"
 
 namespace hdrd::daemon {

@@ -118,7 +118,9 @@ TEST(PeakCode, CpuEncodersNeverWriteACodeAboveThePeak) {
             << to_string(m.mode) << " " << to_string(m.range) << " " << curve << " peak " << peak << ": code " << code;
         EXPECT_LE(carried.max_cll_nits, f->mastering.max_nits) << peak;
         for (std::uint16_t v : f->signal16)
-          if (m.mode == Mode::hdr10 && m.range == Range::full) EXPECT_LE(standard::pq_eotf(v / 65535.0), peak * (1 + 1e-12)) << peak;
+          if (m.mode == Mode::hdr10 && m.range == Range::full) {
+            EXPECT_LE(standard::pq_eotf(v / 65535.0), peak * (1 + 1e-12)) << peak;
+          }
       }
 }
 

@@ -352,7 +352,9 @@ TEST(Encode, GamutTargetDisplayMapsIntoTheEdidsPrimaries) {
             worst_code = std::max(worst_code, std::abs(got[ch] - static_cast<int>(std::clamp(e[ch], 0.0, 1.0) * 1023 + 0.5)));
         }
       EXPECT_LE(worst_code, 1) << to_string(g) << (display ? " display" : " container");
-      if (display) EXPECT_LE(worst, 1e-3) << to_string(g) << ": outside the display's gamut";
+      if (display) {
+        EXPECT_LE(worst, 1e-3) << to_string(g) << ": outside the display's gamut";
+      }
     }
     EXPECT_GT(outside_container_target, 0) << to_string(g) << ": the container target leaves the display's gamut";
   }
