@@ -277,10 +277,12 @@ class HdrdClient:
                 raise TimeoutError(f"job {job_id} is still {j['state']} after {timeout} s")
             time.sleep(poll_s)
 
-    def result(self, job_id, path):
+    def result(self, job_id, path, keep=False):
         """GET /v1/jobs/{id}/result into `path` (streamed, never held in memory): the video,
         or the sequence sidecar when the request had no video. Returns the media type.
-        HdrdError 409 job.not_ready while the job runs."""
+        Once downloaded, the job's files in the daemon's dump directory are a copy nobody
+        asked to keep: they are removed (DELETE /v1/jobs/{id}, as `hdrctl -o` does) unless
+        keep=True. HdrdError 409 job.not_ready while the job runs."""
         conn = self._connection()
         headers = {"Authorization": "Bearer " + self.token} if self.token else {}
         try:
@@ -296,10 +298,13 @@ class HdrdClient:
             finally:
                 if os.path.exists(tmp):
                     os.remove(tmp)
-            return resp.getheader("Content-Type", "")
+            media_type = resp.getheader("Content-Type", "")
         except (http.client.HTTPException, OSError):
             self.close()
             raise
+        if not keep:
+            self.cancel(job_id)
+        return media_type
 
     def sidecar(self, job_id):
         """GET /v1/jobs/{id}/sidecar: the sequence sidecar (docs/sequences.md) as a dict."""

@@ -26,10 +26,22 @@ assert any(j["id"] == accepted["id"] for j in c.jobs()["jobs"])
 
 with tempfile.TemporaryDirectory() as tmp:
     out = os.path.join(tmp, "py.mp4")
-    assert c.result(accepted["id"], out) == "video/mp4"
+    assert c.result(accepted["id"], out, keep=True) == "video/mp4"
     with open(out, "rb") as a, open(os.path.join(dump_dir, "py.mp4"), "rb") as b:
         assert a.read() == b.read(), "the downloaded video differs from the daemon's file"
 assert c.sidecar(accepted["id"])["frame_count"] == 6
+
+# Without keep, a download removes the job's files from the dump directory (as hdrctl -o).
+tidy = c.submit_sequence({"images": "shot/shot.%04d.exr", "name": "pytidy", "display": {"mode": "hdr10"},
+                          "video": {"codec": "hevc", "preset": "ultrafast"}})
+c.wait(tidy["id"], poll_s=0.02)
+assert [f for f in os.listdir(dump_dir) if f.startswith("pytidy.")], os.listdir(dump_dir)
+with tempfile.TemporaryDirectory() as tmp:
+    out = os.path.join(tmp, "pytidy.mp4")
+    assert c.result(tidy["id"], out) == "video/mp4"
+    assert os.path.getsize(out) > 0
+assert not [f for f in os.listdir(dump_dir) if f.startswith("pytidy.")], os.listdir(dump_dir)
+assert c.job(tidy["id"])["files_removed"] is True
 
 try:
     c.job("0000000000000000")
