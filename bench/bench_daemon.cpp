@@ -29,7 +29,7 @@
 
 #include <fmt/format.h>
 
-#include "daemon/client.hpp"
+#include "clients/cpp/client.hpp"
 #include "encode/io/io.hpp"
 #include "job/frame_job.hpp"
 #include "job/request.hpp"

@@ -114,7 +114,7 @@ fs::path SequencePlan::resolved_work_dir() const {
 }
 
 json SequencePlan::to_json() const {
-  // The header fields the engines read come first (deploy/lib/plan.sh, daemon/slurm.cpp).
+  // The header fields the engines read come first (deploy/lib/plan.sh, daemon/cluster/slurm.cpp).
   json j = json::object();
   j["format"] = "hdrd-sequence-plan";
   j["format_version"] = 1;

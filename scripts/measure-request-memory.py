@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Peak memory of single requests against the daemon's admission estimate (daemon/memory.hpp).
+"""Peak memory of single requests against the daemon's admission estimate (daemon/jobs/memory.hpp).
 
 For each case: the daemon's peak RSS is reset (/proc/PID/clear_refs "5", Linux >= 4.0; needs
 the daemon's uid or root), one request is sent alone, and the new peak (VmHWM) minus the RSS

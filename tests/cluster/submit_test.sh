@@ -92,7 +92,7 @@ refuses "a malformed list" "expected a list like 0,3-5" "$plan" "$tmp/out/seq" -
 refuses "--max-parallel 0" "--max-parallel 0: expected an integer >= 1" "$plan" "$tmp/out/seq" --max-parallel 0
 refuses "an OUTBASE in a missing folder" "its folder does not exist" "$plan" "$tmp/nowhere/seq"
 refuses "too few arguments" "usage:" "$plan"
-# The plan-header rules, case by case from the table daemon/slurm.cpp is tested on too.
+# The plan-header rules, case by case from the table daemon/cluster/slurm.cpp is tested on too.
 # One jq run writes case-N.json and case-N.expect (the error, empty for a good plan).
 mkdir -p "$tmp/cases"
 count=$(jq '.cases | length' "$here/plan_header_cases.json")

@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "daemon/config.hpp"
-#include "daemon/listener.hpp"
+#include "daemon/http/listener.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace hdrd::daemon {

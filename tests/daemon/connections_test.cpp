@@ -1,4 +1,4 @@
-// The connection table (daemon/connections.hpp) without MHD: socket pairs stand in for
+// The connection table (daemon/http/connections.hpp) without MHD: socket pairs stand in for
 // connections, and time is passed in, so every deadline here is forced, not waited for.
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/connections.hpp"
+#include "daemon/http/connections.hpp"
 
 namespace hdrd::daemon {
 namespace {

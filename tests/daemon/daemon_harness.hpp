@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/client.hpp"
+#include "clients/cpp/client.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace hdrd::testing {

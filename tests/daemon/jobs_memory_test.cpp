@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/jobs.hpp"
-#include "daemon/memory.hpp"
+#include "daemon/jobs/jobs.hpp"
+#include "daemon/jobs/memory.hpp"
 #include "job/request.hpp"
 #include "tests/testing/testing.hpp"
 

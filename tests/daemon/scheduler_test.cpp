@@ -10,7 +10,7 @@
 #include <mutex>
 #include <thread>
 
-#include "daemon/scheduler.hpp"
+#include "daemon/jobs/scheduler.hpp"
 
 namespace hdrd::daemon {
 namespace {

@@ -1,4 +1,4 @@
-// The Slurm client (daemon/slurm.hpp) against the real one-node cluster that the ctest
+// The Slurm client (daemon/cluster/slurm.hpp) against the real one-node cluster that the ctest
 // fixture cluster.slurm.start brings up (scripts/slurm-local.sh; HDRD_SLURM_DIR). Skips with
 // the reason where there is none. The jobs run tests/cluster/stand_in_hdrd.sh (or HDRD_BIN)
 // through tests/cluster/run_log_wrapper.sh, which logs every call and fails shards on demand.
@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/slurm.hpp"
+#include "daemon/cluster/slurm.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// daemon/slurm.hpp and daemon/subprocess.hpp without a cluster: the parsers on outputs
+// daemon/cluster/slurm.hpp and daemon/cluster/subprocess.hpp without a cluster: the parsers on outputs
 // recorded from Slurm 22.05 (tests/daemon/data/slurm/README.md) and on malformed ones, the
 // plan-header rules from the table deploy/lib/plan.sh is tested on, the subprocess runner,
 // and the client against recording stand-ins for sbatch, squeue, sacct and scancel, whose
@@ -20,8 +20,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "daemon/slurm.hpp"
-#include "daemon/subprocess.hpp"
+#include "daemon/cluster/slurm.hpp"
+#include "daemon/cluster/subprocess.hpp"
 #include "tests/testing/testing.hpp"
 
 namespace {

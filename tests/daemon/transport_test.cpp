@@ -11,10 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "daemon/accept.hpp"
-#include "daemon/input_bounds.hpp"
-#include "daemon/paths.hpp"
-#include "daemon/wire_error.hpp"
+#include "daemon/http/accept.hpp"
+#include "daemon/http/input_bounds.hpp"
+#include "daemon/api/paths.hpp"
+#include "daemon/http/wire_error.hpp"
 #include "job/settings.hpp"
 #include "tests/testing/testing.hpp"
 
@@ -238,7 +238,7 @@ TEST(WireError, EveryCodeInTheCodeBaseHasAStatus) {
     if (!status_of(c)) missing.insert(c);
   std::string list;
   for (const auto& c : missing) list += " " + c;
-  EXPECT_TRUE(missing.empty()) << "codes without a status in daemon/wire_error.cpp:" << list;
+  EXPECT_TRUE(missing.empty()) << "codes without a status in daemon/http/wire_error.cpp:" << list;
 }
 
 }  // namespace

@@ -15,7 +15,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "daemon/client.hpp"
+#include "clients/cpp/client.hpp"
 #include "tests/daemon/daemon_harness.hpp"
 #include "tests/testing/testing.hpp"
 

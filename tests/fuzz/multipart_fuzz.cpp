@@ -1,5 +1,5 @@
 // Fuzz target: a multipart/form-data POST /v1/encode body through the daemon's real HTTP
-// layer (daemon/http_server.cpp on libmicrohttpd, whose post processor splits the parts)
+// layer (daemon/http/server.cpp on libmicrohttpd, whose post processor splits the parts)
 // and what the endpoint does with the parts: split_encode_upload (the bounded JSON of the
 // 'request' part, issue 14's crash), the request parser, the canonical JSON. The server
 // runs in this process on a Unix socket; each input is one request on a fresh connection.
@@ -20,9 +20,9 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "daemon/http_server.hpp"
-#include "daemon/input_bounds.hpp"
-#include "daemon/listener.hpp"
+#include "daemon/http/server.hpp"
+#include "daemon/http/input_bounds.hpp"
+#include "daemon/http/listener.hpp"
 #include "job/request.hpp"
 
 namespace {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "daemon/input_bounds.hpp"
+#include "daemon/http/input_bounds.hpp"
 #include "job/request.hpp"
 
 namespace {

@@ -1,6 +1,6 @@
 // Fuzz target for the request parser (job/request.hpp) in all its spellings: JSON bodies of
 // POST /v1/render, /v1/encode, /v1/pattern; query strings; CLI flag lists; Accept headers,
-// base64 and paths inside an asset root (daemon/accept.hpp, daemon/paths.hpp). The first
+// base64 and paths inside an asset root (daemon/http/accept.hpp, daemon/api/paths.hpp). The first
 // byte picks what the rest is fed to, the source, and whether it is a sequence request
 // (POST /v1/sequences takes the sequence settings). Links only hdrd_daemon_request (and the pure request
 // library under it).
@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "daemon/accept.hpp"
-#include "daemon/paths.hpp"
+#include "daemon/http/accept.hpp"
+#include "daemon/api/paths.hpp"
 #include "job/request.hpp"
 
 namespace {

@@ -1,4 +1,4 @@
-// Fuzz target for the Slurm client's parsers (daemon/slurm.hpp): sbatch --parsable, squeue
+// Fuzz target for the Slurm client's parsers (daemon/cluster/slurm.hpp): sbatch --parsable, squeue
 // and sacct in their fixed formats, the plan header, state names. The first byte picks the
 // parser. Links only hdrd_daemon_slurm.
 //
@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "daemon/slurm.hpp"
+#include "daemon/cluster/slurm.hpp"
 
 namespace {
 

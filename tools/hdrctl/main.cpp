@@ -17,7 +17,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "daemon/client.hpp"
+#include "clients/cpp/client.hpp"
 #include "encode/display_target.hpp"
 #include "tools/common/cli_docs.hpp"
 #include "tools/common/progress_bar.hpp"

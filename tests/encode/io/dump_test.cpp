@@ -311,7 +311,7 @@ TEST(AtomicWrite, ReplacesAndNeverTruncates) {
   EXPECT_EQ(listing(tmp.path()), (std::set<std::string>{"x.bin", "dir.bin"}));
 }
 
-// The daemon removes the temporaries a killed writer left (daemon/dump_dir.cpp) by this
+// The daemon removes the temporaries a killed writer left (daemon/jobs/dump_dir.cpp) by this
 // predicate: the names create_temp makes, and nothing else.
 TEST(AtomicWrite, TemporaryNamesAreRecognised) {
   EXPECT_TRUE(is_atomic_write_temporary(".frame.png.tmp-0123456789ab"));
