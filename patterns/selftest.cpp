@@ -291,10 +291,10 @@ Result<DisplayTarget> suite_target(std::string_view mode, std::optional<double> 
   const std::string m = mode == "sdr-srgb" ? "sdr" : std::string(mode);
   const auto parsed = parse_mode(m);
   if (!parsed) return make_error("selftest.mode", fmt::format("unknown mode '{}' (sdr-srgb, sdr-bt1886, hdr10, scrgb, hlg)", mode), "mode");
-  DisplayTarget t = default_target(*parsed);
-  if (peak) t.peak_nits = *peak;
-  if (auto ok = validate(t); !ok) return ok.error();
-  return t;
+  // Through the resolver, as every front end: paper white follows a peak below it.
+  LevelSettings asked;
+  asked.peak_nits = peak;
+  return resolve_target(*parsed, {}, asked);
 }
 
 Report run_suite(const DisplayTarget& target, std::string_view mode_name, const SuiteOptions& o) {
