@@ -97,7 +97,7 @@ Result<EncodedFrame> scrgb_to_hdr10(const EncodedFrame& in) {
     for (int x = 0; x < in.width; ++x) {
       auto half = [&](int c) { return half_to_double(static_cast<std::uint16_t>(src[8 * x + 2 * c] | (src[8 * x + 2 * c + 1] << 8))); };
       color::Vec3 nits = to2020 * color::Vec3{half(0), half(1), half(2)} * transfer::kScrgbUnitNits;
-      auto clip = [](double v) { return std::isfinite(v) ? std::clamp(v, 0.0, transfer::kPqPeakNits) : 0.0; };
+      auto clip = [&](double v) { return std::isfinite(v) ? std::clamp(v, 0.0, in.target.peak_nits) : 0.0; };
       nits = {clip(nits.x), clip(nits.y), clip(nits.z)};
       const double m = std::max({nits.x, nits.y, nits.z});
       max_cll = std::max(max_cll, m);

@@ -296,10 +296,10 @@ std::string suite_modes_text() {
 Result<DisplayTarget> suite_target(std::string_view mode, std::optional<double> peak) {
   const auto parsed = parse_mode(mode);
   if (!parsed) return make_error("selftest.mode", fmt::format("unknown mode '{}' ({})", mode, suite_modes_text()), "mode");
-  DisplayTarget t = default_target(*parsed);
-  if (peak) t.peak_nits = *peak;
-  if (auto ok = validate(t); !ok) return ok.error();
-  return t;
+  // Through the resolver, as every front end: paper white follows a peak below it.
+  LevelSettings asked;
+  asked.peak_nits = peak;
+  return resolve_target(*parsed, {}, asked);
 }
 
 Report run_suite(const DisplayTarget& target, std::string_view mode_name, const SuiteOptions& o) {

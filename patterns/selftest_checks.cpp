@@ -39,7 +39,7 @@ std::pair<int, std::string> paper_white_code(const DisplayTarget& t) {
   const double pw = t.paper_white_nits;
   switch (t.mode) {
     case Mode::hdr10:
-      if (pw == 203 && t.range == Range::full && t.bits == 10)
+      if (pw == 203 && t.range == Range::full && t.bits == 10 && t.peak_nits >= pw)
         return {594, "BT.2408-7 §2: 203 cd/m2 -> PQ 58 %, code 594 (10-bit full range)"};
       return {std::min(quantize(t, transfer::pq_inverse_eotf(pw)), peak_code(t)),
               "SMPTE ST 2084 inverse EOTF of paper white (at most the peak's code)"};
@@ -113,7 +113,8 @@ Check check_peak(const EncodedFrame& f, const std::string& what) {
   const std::string name = "peak/" + what;
   // One rule in every mode: no pixel's channel decodes above the display peak (the largest
   // code at or below it, not the nearest code to it, which half of all integer PQ peaks put
-  // above). Exact for the code modes; scRGB's half floats keep their rounding (2^-11).
+  // above). For the code modes to 1e-6 (the decoder's float arithmetic; one code near the
+  // peak is ~0.3 %); scRGB's half floats keep their rounding (2^-11).
   double highest = 0;
   int highest_code = 0;
   for (int y = 0; y < f.height; ++y)
@@ -123,7 +124,7 @@ Check check_peak(const EncodedFrame& f, const std::string& what) {
       if (t.mode != Mode::scrgb)
         for (int c : read_pixel(f, x, y).code) highest_code = std::max(highest_code, c);
     }
-  const double tolerance = t.mode == Mode::scrgb ? std::ldexp(1.0, -11) : 1e-9;
+  const double tolerance = t.mode == Mode::scrgb ? std::ldexp(1.0, -11) : 1e-6;
   const std::string code = t.mode == Mode::scrgb ? "" : fmt::format(" (code {})", highest_code);
   return make(name,
               t.mode == Mode::hdr10 ? "ST 2084 / ST 2086: no code decodes above the display peak"
@@ -426,7 +427,8 @@ Check check_black_frame_metadata(const EncodedFrame& f, const nlohmann::json& si
   const std::string name = "black-frame-metadata";
   const std::string source = "REFERENCE.md §6: MaxCLL/MaxFALL that would be 0 (CTA-861.3: unknown) carry the "
                              "mastering peak, the same in the sidecar, PNG cLLI and HDR_OUTPUT_METADATA";
-  const int want = static_cast<int>(std::lround(f.mastering.max_nits));
+  // The mastering maximum in whole cd/m2, rounded down: no carried level may exceed it.
+  const int want = std::max(1, static_cast<int>(std::floor(f.mastering.max_nits + 1e-6)));
   std::vector<std::string> seen, bad;
   auto expect = [&](const std::string& where, double cll, double fall) {
     seen.push_back(fmt::format("{} {:g}/{:g}", where, cll, fall));

@@ -19,7 +19,8 @@ namespace {
 using Bytes32 = std::array<std::uint8_t, kHdrOutputMetadataSize>;
 
 TEST(HdrOutputMetadata, Hdr10WithP3MasteringByHand) {
-  // P3-D65 mastering, 1000 / 0.005 cd/m2, MaxCLL 1000.4 (rounds up to 1001), MaxFALL 400.
+  // P3-D65 mastering, 1000 / 0.005 cd/m2, MaxCLL 1000.4 (rounded up, 1001, is above the
+  // mastering maximum: carried as 1000, issue 29 item 2), MaxFALL 400.
   MasteringDisplay md{color::kDisplayP3, 1000.0, 0.005};
   auto m = make_hdr_output_metadata(Mode::hdr10, md, ContentLightLevel{1000.4, 400.0});
   ASSERT_TRUE(m.ok()) << m.error().message;
@@ -33,7 +34,7 @@ TEST(HdrOutputMetadata, Hdr10WithP3MasteringByHand) {
       0x13, 0x3d, 0x42, 0x40,  // W 0.3127 -> 15635, 0.3290 -> 16450
       0xe8, 0x03,              // max mastering 1000 cd/m2
       0x32, 0x00,              // min mastering 0.005 cd/m2 = 50 x 0.0001
-      0xe9, 0x03,              // MaxCLL 1001
+      0xe8, 0x03,              // MaxCLL 1000 (never above the mastering maximum)
       0x90, 0x01,              // MaxFALL 400
       0x00, 0x00};             // padding
   EXPECT_EQ(serialize(*m), expected);
@@ -64,8 +65,10 @@ TEST(HdrOutputMetadata, RoundingAndClamping) {
   auto m = make_hdr_output_metadata(Mode::hdr10, md, ContentLightLevel{70000.0, 0.2});
   ASSERT_TRUE(m.ok());
   EXPECT_EQ(m->min_display_mastering_luminance, 1);  // 0.5 x 0.0001 rounds to 1
-  EXPECT_EQ(m->max_cll, 65535);                      // u16 ceiling
+  EXPECT_EQ(m->max_cll, 10000);                      // never above the mastering maximum
   EXPECT_EQ(m->max_fall, 1);                         // 0.2 rounds *up* to 1, not down to "unknown"
+  auto up = make_hdr_output_metadata(Mode::hdr10, md, ContentLightLevel{999.4, 250.0});
+  EXPECT_EQ(up->max_cll, 1000);  // below the mastering maximum, MaxCLL rounds up
   auto exact = make_hdr_output_metadata(Mode::hdr10, md, ContentLightLevel{1000.0, 250.0});
   EXPECT_EQ(exact->max_cll, 1000);  // an exact integer does not round up
   EXPECT_EQ(exact->max_fall, 250);
@@ -95,7 +98,7 @@ TEST(HdrOutputMetadata, LayoutMatchesLibdrmStruct) {
   EXPECT_EQ(k.hdmi_metadata_type1.white_point.x, 15635);
   EXPECT_EQ(k.hdmi_metadata_type1.max_display_mastering_luminance, 1000);
   EXPECT_EQ(k.hdmi_metadata_type1.min_display_mastering_luminance, 50);
-  EXPECT_EQ(k.hdmi_metadata_type1.max_cll, 1001);
+  EXPECT_EQ(k.hdmi_metadata_type1.max_cll, 1000);  // 1000.4 capped at the mastering maximum
   EXPECT_EQ(k.hdmi_metadata_type1.max_fall, 400);
   auto back = parse_hdr_output_metadata(bytes);
   ASSERT_TRUE(back.ok());

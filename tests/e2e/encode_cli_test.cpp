@@ -314,7 +314,8 @@ TEST(EncodeCli, NonFiniteInputSamplesAreCountedAndWarned) {
   HDRD_REQUIRE_FIXTURE(exr, "fixtures/exr/BrightRingsNanInf.exr");
   HDRD_REQUIRE_FIXTURE(stats_file, "fixtures/exr/reference_stats.json");
   std::uint64_t nan = 0, inf = 0;
-  for (const auto& img : nlohmann::json::parse(hdrd::testing::read_file(stats_file))["images"])
+  const auto stats = nlohmann::json::parse(hdrd::testing::read_file(stats_file));
+  for (const auto& img : stats["images"])
     if (img["file"] == "exr/BrightRingsNanInf.exr")
       for (int c = 0; c < 3; ++c) nan += img["stats_nancount"][c].get<std::uint64_t>(), inf += img["stats_infcount"][c].get<std::uint64_t>();
   ASSERT_GT(nan + inf, 0u);

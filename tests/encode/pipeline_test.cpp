@@ -565,7 +565,9 @@ TEST(SignalStage, QuantizerForEveryCodeMode) {
           for (double nits : {t.black_nits, t.paper_white_nits, t.peak_nits, t.peak_nits * 4}) {
             const double e = std::clamp(reference_signal(t, {nits, nits, nits})[0], 0.0, 1.0);
             const int want = static_cast<int>(std::floor(e * sig.code_scale + sig.code_offset + 0.5));
-            EXPECT_EQ(sig.codes.code(static_cast<float>(nits)), std::min(want, sig.max_code))
+            // Capped at the peak's code (the largest at or below the peak: 722 narrow at 1000
+            // cd/m2, whose nearest code 723 decodes above it).
+            EXPECT_EQ(sig.codes.code(static_cast<float>(nits)), std::min(want, sig.peak_code))
                 << to_string(m) << " " << bits << " bits at " << nits << " nits";
           }
         }

@@ -158,7 +158,9 @@ TEST(GpuEncodePeak, NoCodeDecodesAboveThePeak) {
       const double e = range == Range::narrow ? std::clamp((top / 4.0 - 16) / 219, 0.0, 1.0) : top / 1023.0;
       EXPECT_LE(::hdrd::testing::standard::pq_eotf(e), peak * (1 + 1e-12)) << "peak " << peak << ": code " << top;
       for (std::uint16_t v : f.signal16)
-        if (range == Range::full) EXPECT_LE(::hdrd::testing::standard::pq_eotf(v / 65535.0), peak * (1 + 1e-12)) << peak;
+        if (range == Range::full) {
+          EXPECT_LE(::hdrd::testing::standard::pq_eotf(v / 65535.0), peak * (1 + 1e-12)) << peak;
+        }
       const CarriedLightLevel carried = carried_light_level(f.content_light, f.mastering);
       EXPECT_LE(carried.max_cll_nits, f.mastering.max_nits) << "peak " << peak;
     }
