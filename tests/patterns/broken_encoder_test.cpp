@@ -83,8 +83,9 @@ TEST(BrokenEncoder, CodesAboveThePeakFail) {
   shift_codes(f, 1);
   const Check c = check_peak(f, "t");
   EXPECT_FALSE(c.passed);
-  // 600 cd/m2 is PQ code 712 (10-bit full range); the broken encoder wrote 713.
-  EXPECT_NE(c.detail.find("highest code 713 vs peak code 712"), std::string::npos) << c.detail;
+  // The largest 10-bit full-range PQ code at or below 600 cd/m2 is 712 (598.33 cd/m2); the
+  // broken encoder wrote 713, which decodes to 603.75 cd/m2, above the peak.
+  EXPECT_NE(c.detail.find("603.7544 cd/m2 (code 713) vs peak 600 cd/m2"), std::string::npos) << c.detail;
 }
 
 TEST(BrokenEncoder, WrongContentLightFails) {

@@ -19,6 +19,7 @@ struct SettingGroup {
 };
 constexpr SettingGroup kSettingGroups[] = {
     {"display", "Display"},       {"tone", "Tone mapping"},     {"gamut", "Tone mapping"},
+    {"gamut_target", "Tone mapping"},
     {"exposure", "Exposure"},     {"ui", "UI overlay"},         {"grade", "Grading"},
     {"scene", "Source"},          {"width", "Source"},          {"height", "Source"},
     {"samples", "Source"},        {"camera", "Source"},         {"start_s", "Source"},
