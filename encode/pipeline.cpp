@@ -47,15 +47,8 @@ Mat3 working_to_container(const DisplayTarget& t) {
   return t.container() == color::kRec2020 ? Mat3::identity() : color::rgb_to_rgb(color::kRec2020, t.container());
 }
 
-namespace {
-bool in_cube(Vec3 c, double peak, double tol) {
-  const double lo = -tol * peak, hi = peak * (1 + tol);
-  return c.x >= lo && c.y >= lo && c.z >= lo && c.x <= hi && c.y <= hi && c.z <= hi;
-}
-Vec3 clamp_to(Vec3 c, double peak) {
-  return {std::clamp(c.x, 0.0, peak), std::clamp(c.y, 0.0, peak), std::clamp(c.z, 0.0, peak)};
-}
-}  // namespace
+using gamut::clamp_to;
+using gamut::in_cube;
 
 // scRGB is not mapped: its negatives carry wide colours. The family's other maps
 // (gamut_map.hpp) run through their prepared mapper; HLG's volume then fits at constant

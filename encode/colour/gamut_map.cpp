@@ -27,7 +27,6 @@ std::optional<GamutMapping> parse_gamut_mapping(std::string_view s) {
 
 namespace gamut {
 
-namespace {
 bool in_cube(Vec3 c, double peak, double tol) {
   const double lo = -tol * peak, hi = peak * (1 + tol);
   return c.x >= lo && c.y >= lo && c.z >= lo && c.x <= hi && c.y <= hi && c.z <= hi;
@@ -35,6 +34,8 @@ bool in_cube(Vec3 c, double peak, double tol) {
 Vec3 clamp_to(Vec3 c, double peak) {
   return {std::clamp(c.x, 0.0, peak), std::clamp(c.y, 0.0, peak), std::clamp(c.z, 0.0, peak)};
 }
+
+namespace {
 Vec3 positive(Vec3 v) { return {std::max(v.x, 0.0), std::max(v.y, 0.0), std::max(v.z, 0.0)}; }
 }  // namespace
 

@@ -53,6 +53,10 @@ namespace gamut {
 // Colours inside [lo, hi] per channel are "inside": hi = peak (1 + tolerance), lo = -tolerance peak.
 inline constexpr double kDefaultTolerance = 1e-4;
 
+// Whether c lies in [-tol peak, peak (1 + tol)]^3, and c clamped to [0, peak]^3.
+bool in_cube(color::Vec3 c, double peak, double tol);
+color::Vec3 clamp_to(color::Vec3 c, double peak);
+
 // Constant ICtCp intensity (capped at the peak's), chroma reduced until `to_target` of the
 // colour fits [0, peak]^3: REFERENCE.md §1.5, the `ictcp` map. Shared by the pipeline.
 color::Vec3 desaturate(color::Vec3 working_nits, const color::Mat3& to_target, double peak_nits);
