@@ -6,14 +6,6 @@
 # (or sudo); installs only what is missing.
 set -euo pipefail
 packages=(debhelper lintian debootstrap groff-base man-db podman)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")
-done
-[ ${#missing[@]} -eq 0 ] && exit 0
-echo "install-package-test-deps: installing ${missing[*]}" >&2
-sudo=""
-[ "$(id -u)" -eq 0 ] || sudo=sudo
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+# shellcheck source=scripts/lib/apt-missing.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib/apt-missing.sh"
+apt_install_missing install-package-test-deps "${packages[@]}"

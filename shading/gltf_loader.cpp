@@ -93,19 +93,6 @@ bool confined(const std::string& path, void* user) {
 }
 bool confined_exists(const std::string& path, void* user) { return confined(path, user) && tinygltf::FileExists(path, nullptr); }
 std::string no_expand(const std::string& p, void*) { return p; }
-bool confined_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
-  if (!confined(path, user)) {
-    if (err) *err += "external file '" + path + "' refused: outside the scene's directory\n";
-    return false;
-  }
-  auto bytes = static_cast<const Confinement*>(user)->files->read(path, kMaxFileBytes);
-  if (!bytes) {
-    if (err) *err += one_line(bytes.error().message) + "\n";
-    return false;
-  }
-  out->assign(bytes->begin(), bytes->end());
-  return true;
-}
 // Unconfined (the CLI): any file, still through InputFiles, so a FIFO is refused, not waited on.
 bool plain_exists(const std::string& path, void*) { return tinygltf::FileExists(path, nullptr); }
 bool plain_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
@@ -116,6 +103,13 @@ bool plain_read(std::vector<unsigned char>* out, std::string* err, const std::st
   }
   out->assign(bytes->begin(), bytes->end());
   return true;
+}
+bool confined_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  if (!confined(path, user)) {
+    if (err) *err += "external file '" + path + "' refused: outside the scene's directory\n";
+    return false;
+  }
+  return plain_read(out, err, path, user);
 }
 bool no_write(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
 
