@@ -141,6 +141,7 @@ Result<DisplayTarget> resolve_target(Mode mode, const LevelSettings& display, co
   t.range = pick(request.range, display.range, Range::full);
   t.sdr_curve = pick(request.sdr_curve, display.sdr_curve, SdrCurve::srgb);
   t.sdr_content_eotf = pick(request.sdr_content_eotf, display.sdr_content_eotf, SdrEotf::srgb);
+  t.sdr_inverse_tonemap = pick(request.sdr_inverse_tonemap, display.sdr_inverse_tonemap, InverseTonemap::linear);
   t.bits = pick(request.bits, display.bits, info.default_bits());
   t.display_primaries = request.display_primaries ? request.display_primaries : display.display_primaries;
   t.source = display_source.empty() ? "defaults" : std::string(display_source);

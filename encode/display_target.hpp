@@ -86,6 +86,9 @@ struct DisplayTarget {
   // How SDR content placed in the frame (the UI overlay, SDR images) decodes to light:
   // the EOTF of the display it was mastered on (encode/colour/sdr_content.hpp).
   SdrEotf sdr_content_eotf = SdrEotf::srgb;
+  // How that light lands in nits (ui.inverse_tonemap): the linear gain to its white, or an
+  // inverse tone map bounded by the peak (sdr_light_to_nits).
+  InverseTonemap sdr_inverse_tonemap = InverseTonemap::linear;
   Range range = Range::full;
   SdrCurve sdr_curve = SdrCurve::srgb;
   int bits = 10;                     // 10 for hdr10/hlg; 8 or 10 for SDR; 16 (half) for scrgb
@@ -120,10 +123,11 @@ struct LevelSettings {
   std::optional<Range> range;
   std::optional<SdrCurve> sdr_curve;
   std::optional<SdrEotf> sdr_content_eotf;
+  std::optional<InverseTonemap> sdr_inverse_tonemap;
   std::optional<int> bits;
   std::optional<color::Primaries> display_primaries;
   bool any_level() const {
-    return peak_nits || black_nits || paper_white_nits || ui_white_nits || sdr_white_nits || range || sdr_curve || sdr_content_eotf || bits;
+    return peak_nits || black_nits || paper_white_nits || ui_white_nits || sdr_white_nits || range || sdr_curve || sdr_content_eotf || sdr_inverse_tonemap || bits;
   }
 };
 

@@ -517,6 +517,7 @@ LevelSettings request_levels(const FrameRequest& r) {
   const std::string range = r.text("display.range"), sdr_curve = r.text("display.sdr_curve"),
                     sdr_eotf = r.text("display.sdr_content_eotf");
   if (r.has("display.sdr_content_eotf")) l.sdr_content_eotf = parse_sdr_eotf(sdr_eotf);
+  if (r.has("ui.inverse_tonemap")) l.sdr_inverse_tonemap = parse_inverse_tonemap(r.text("ui.inverse_tonemap"));
   if (r.has("display.range")) l.range = parse_range(range);
   if (r.has("display.sdr_curve")) l.sdr_curve = parse_sdr_curve(sdr_curve);
   if (!r.is_null("display.bits")) l.bits = static_cast<int>(r.integer("display.bits"));

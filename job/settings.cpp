@@ -19,6 +19,7 @@ using nlohmann::json;
 constexpr std::string_view kRanges[] = {"full", "narrow"};
 constexpr std::string_view kSdrCurves[] = {"srgb", "gamma22"};
 constexpr std::string_view kSdrEotfs[] = {"srgb", "gamma22", "bt1886"};
+constexpr std::string_view kInverseTonemaps[] = {"linear", "bt2446c", "bt2446a-inverse"};
 constexpr std::string_view kApply[] = {"per-channel", "max-rgb", "luminance", "rgb"};
 constexpr const auto& kGamut = kGamutMappingNames;
 constexpr std::string_view kGamutTargets[] = {"container", "display"};
@@ -236,6 +237,12 @@ std::vector<Setting> make_table() {
       {.path = "ui.dim", .type = T::number, .sources = kSceneReferred,
        .doc = "Dim the frame under translucent UI by this fraction of alpha", .min = 0, .max = 1, .default_json = "0",
        .flag = "--ui-dim", .metavar = "F", .query = "ui_dim"},
+      {.path = "ui.inverse_tonemap", .type = T::choice, .sources = kAllSources,
+       .doc = "How SDR content (the UI overlay, SDR input, sdr-* patterns) lands in HDR frames: linear (a gain to its "
+              "white) or bt2446c (BT.2446-1 method C inverse; bt2446a-inverse is an alias), highlights expanded up "
+              "to the peak at signal 1",
+       .choices = kInverseTonemaps, .default_json = "\"linear\"", .flag = "--ui-inverse-tonemap", .metavar = "HOW",
+       .query = "ui_inverse_tonemap"},
 
       // ---- grading (RTR4 §8.2.3; docs/grading.md) ----
       {.path = "grade.lut", .type = T::path, .sources = kSceneReferred,

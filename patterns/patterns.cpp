@@ -167,6 +167,13 @@ double sdr_relative(const DisplayTarget& t, double v) {
 // modes the display's own white.
 double sdr_white(const DisplayTarget& t) { return t.is_hdr() ? t.sdr_white_nits : t.peak_nits; }
 
+// SDR light relative to its white -> nits: in an HDR frame through ui.inverse_tonemap
+// (sdr_light_to_nits), in SDR modes the display's own white.
+double sdr_nits(const DisplayTarget& t, double light) {
+  if (!t.is_hdr()) return light * t.peak_nits;
+  return sdr_light_to_nits(t.sdr_inverse_tonemap, light, t.sdr_white_nits, t.peak_nits);
+}
+
 Image sdr_grey(const DisplayTarget& t, const PatternOptions& o) {
   Image img(o.width, o.height);
   Canvas c{img};
@@ -175,7 +182,7 @@ Image sdr_grey(const DisplayTarget& t, const PatternOptions& o) {
   std::vector<std::string> labels;
   for (int i = 0; i < steps; ++i) {
     const double v = double(i) / (steps - 1);
-    levels.push_back(sdr_white(t) * sdr_relative(t, v));
+    levels.push_back(sdr_nits(t, sdr_relative(t, v)));
     labels.push_back(fmt::format("{:.0f}%", v * 100));
   }
   patch_row(c, levels, labels, t, o.labels);
@@ -194,7 +201,7 @@ Image sdr_shadows(const DisplayTarget& t, const PatternOptions& o) {
     const int y0 = r * row_h, y1 = y0 + row_h - std::max(1, row_h / 10);  // a black gap between rows
     for (int i = 0; i < n; ++i) {
       const int x0 = label_w + i * (w - label_w) / n, x1 = label_w + (i + 1) * (w - label_w) / n;
-      c.fill(x0, y0, x1, y1, sdr_white(t) * sdr_eotf(e, signals[static_cast<std::size_t>(i)]));
+      c.fill(x0, y0, x1, y1, sdr_nits(t, sdr_eotf(e, signals[static_cast<std::size_t>(i)])));
     }
     if (o.labels) {
       const std::string name = (e == t.sdr_content_eotf ? ">" : "") + std::string(to_string(e));

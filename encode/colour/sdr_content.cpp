@@ -48,4 +48,33 @@ double sdr_inverse_eotf(SdrEotf e, double l) {
   return l;
 }
 
+std::string_view to_string(InverseTonemap m) {
+  switch (m) {
+    case InverseTonemap::linear: return "linear";
+    case InverseTonemap::bt2446c: return "bt2446c";
+  }
+  return "?";
+}
+
+std::optional<InverseTonemap> parse_inverse_tonemap(std::string_view s) {
+  for (InverseTonemap m : {InverseTonemap::linear, InverseTonemap::bt2446c})
+    if (to_string(m) == s) return m;
+  if (s == "bt2446a-inverse") return InverseTonemap::bt2446c;
+  return std::nullopt;
+}
+
+double sdr_light_to_nits(InverseTonemap m, double light, double white, double peak) {
+  if (m == InverseTonemap::linear) return light * white;
+  const double y = std::clamp(light, 0.0, 1.0);
+  const double y_ip = kBt2446cKnee, k3 = kBt2446cK3;
+  const double nits_ip = y_ip * white;
+  if (!(peak > nits_ip)) return std::min(y * white, peak);
+  if (y <= y_ip) return y * white;
+  // (exp((1 - k4) / k2) + k3) * nits_ip = peak, with k4 = y_ip - k2 ln(1 - k3).
+  const double k2 = (1 - y_ip) / std::log((peak / nits_ip - k3) / (1 - k3));
+  const double k4 = y_ip - k2 * std::log(1 - k3);
+  if (y >= 1) return peak;
+  return std::min((std::exp((y - k4) / k2) + k3) * nits_ip, peak);
+}
+
 }  // namespace hdrd

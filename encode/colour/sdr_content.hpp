@@ -27,4 +27,26 @@ std::optional<SdrEotf> parse_sdr_eotf(std::string_view s);  // "srgb", "gamma22"
 double sdr_eotf(SdrEotf e, double signal);
 double sdr_inverse_eotf(SdrEotf e, double linear);
 
+// How SDR light lands in an HDR frame (ui.inverse_tonemap; docs/encoding.md).
+enum class InverseTonemap {
+  linear,   // nits = light * white (today's mapping; bit-identical)
+  bt2446c,  // ITU-R BT.2446-1 method C's inverse: linear to the knee, exponential expansion above
+};
+
+std::string_view to_string(InverseTonemap m);
+// "linear", "bt2446c"; "bt2446a-inverse" is accepted as an alias of bt2446c.
+std::optional<InverseTonemap> parse_inverse_tonemap(std::string_view s);
+
+// BT.2446-1 method C's knee, relative to SDR white: Y_SDR,ip = 58.535 of a 100 cd/m2 white, and its k3.
+inline constexpr double kBt2446cKnee = 0.58535;
+inline constexpr double kBt2446cK3 = 0.74204;
+
+// The one mapping every caller uses: light relative to SDR white (1 = white, from sdr_eotf)
+// -> display nits, for SDR white `white` on a display of peak `peak` cd/m2. `linear` is
+// light * white. `bt2446c` is linear (light * white) up to the knee, and above it
+// Y = (exp((y - k4) / k2) + k3) * Y_ip (Y_ip = knee * white), with k4 = knee - k2 ln(1 - k3)
+// (continuous at the knee) and k2 chosen so that y = 1 lands on the peak, never above: monotone,
+// bounded. With peak <= Y_ip there is no headroom and it is min(light * white, peak).
+double sdr_light_to_nits(InverseTonemap m, double light, double white, double peak);
+
 }  // namespace hdrd

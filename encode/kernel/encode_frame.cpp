@@ -69,7 +69,7 @@ const FloatBitsLut& sdr_eotf_table(SdrEotf e) {
 }
 
 ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& container, double ui_white,
-                           bool srgb_blend, SdrEotf eotf) {
+                           bool srgb_blend, SdrEotf eotf, InverseTonemap itm, double peak) {
   const Mat3f to_c(color::rgb_to_rgb(color::kRec709, container));
   const FloatBitsLut& decode = sdr_eotf_table(eotf);
   std::vector<float> px(o.rgba.size());
@@ -87,6 +87,11 @@ ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& conta
     } else {
       float lin[3];
       for (int c = 0; c < 3; ++c) lin[c] = enc[c] > 0 ? decode(enc[c]) : 0.0f;
+      if (itm != InverseTonemap::linear) {
+        // Per channel in the UI's own Rec.709 light, then the container matrix (linear keeps
+        // today's float path bit for bit).
+        for (float& l : lin) l = static_cast<float>(sdr_light_to_nits(itm, l, ui_white, peak) / ui_white);
+      }
       const float k = static_cast<float>(ui_white) * a;
       for (int c = 0; c < 3; ++c) {
         out[c] = (to_c.m[c * 3] * lin[0] + to_c.m[c * 3 + 1] * lin[1] + to_c.m[c * 3 + 2] * lin[2]) * k;
@@ -101,13 +106,16 @@ ConvertedUi convert_overlay(const OverlayImage& o, const color::Primaries& conta
 
 std::shared_ptr<const ConvertedUi> converted_overlay(const std::shared_ptr<const OverlayImage>& o,
                                                      const color::Primaries& container, double ui_white,
-                                                     bool srgb_blend, SdrEotf eotf) {
+                                                     bool srgb_blend, SdrEotf eotf, InverseTonemap itm,
+                                                     double peak) {
   struct Entry {
     std::weak_ptr<const OverlayImage> overlay;
     color::Primaries container;
     double ui_white;
     bool srgb_blend;
     SdrEotf eotf;
+    InverseTonemap itm;
+    double peak;
     std::shared_ptr<const ConvertedUi> pixels;
   };
   static std::mutex mu;
@@ -115,12 +123,12 @@ std::shared_ptr<const ConvertedUi> converted_overlay(const std::shared_ptr<const
   {
     std::lock_guard lock(mu);
     if (last && last->overlay.lock() == o && last->container == container && last->ui_white == ui_white &&
-        last->srgb_blend == srgb_blend && last->eotf == eotf)
+        last->srgb_blend == srgb_blend && last->eotf == eotf && last->itm == itm && last->peak == peak)
       return last->pixels;
   }
-  auto px = std::make_shared<const ConvertedUi>(convert_overlay(*o, container, ui_white, srgb_blend, eotf));
+  auto px = std::make_shared<const ConvertedUi>(convert_overlay(*o, container, ui_white, srgb_blend, eotf, itm, peak));
   std::lock_guard lock(mu);
-  last = Entry{o, container, ui_white, srgb_blend, eotf, px};
+  last = Entry{o, container, ui_white, srgb_blend, eotf, itm, peak, px};
   return px;
 }
 
@@ -137,8 +145,11 @@ PreparedUi prepare_ui(const PreparedPipeline& p) {
   ui.white = static_cast<float>(p.settings.target.ui_white_nits);
   ui.srgb_blend = s.srgb_blend;
   ui.eotf = p.settings.target.sdr_content_eotf;
+  // Inverse tone mapping only into HDR frames; in SDR modes UI white is the display's white.
+  const InverseTonemap itm =
+      p.settings.target.is_hdr() ? p.settings.target.sdr_inverse_tonemap : InverseTonemap::linear;
   ui.pixels = converted_overlay(s.overlay, p.settings.target.container(), p.settings.target.ui_white_nits, s.srgb_blend,
-                                ui.eotf);
+                                ui.eotf, itm, p.settings.target.peak_nits);
   ui.px = ui.pixels->px.data();
   return ui;
 }

@@ -208,8 +208,14 @@ EncodeProgram make_encode_program(const PreparedPipeline& p) {
       color::Vec3 enc{o.rgba[i], o.rgba[i + 1], o.rgba[i + 2]};
       if (o.premultiplied) enc = a > 0 ? enc * (1.0 / a) : color::Vec3{};
       const SdrEotf eotf = t.sdr_content_eotf;
-      const color::Vec3 nits = ui_to_c * color::Vec3{sdr_eotf(eotf, enc.x), sdr_eotf(eotf, enc.y),
-                                                     sdr_eotf(eotf, enc.z)} * (t.ui_white_nits * a);
+      color::Vec3 lin{sdr_eotf(eotf, enc.x), sdr_eotf(eotf, enc.y), sdr_eotf(eotf, enc.z)};
+      if (t.is_hdr() && t.sdr_inverse_tonemap != InverseTonemap::linear) {  // as the CPU's convert_overlay
+        const auto m = [&](double l) {
+          return sdr_light_to_nits(t.sdr_inverse_tonemap, l, t.ui_white_nits, t.peak_nits) / t.ui_white_nits;
+        };
+        lin = color::Vec3{m(lin.x), m(lin.y), m(lin.z)};
+      }
+      const color::Vec3 nits = ui_to_c * lin * (t.ui_white_nits * a);
       prog.ui[i] = static_cast<float>(nits.x);
       prog.ui[i + 1] = static_cast<float>(nits.y);
       prog.ui[i + 2] = static_cast<float>(nits.z);

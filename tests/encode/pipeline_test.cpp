@@ -414,6 +414,28 @@ TEST(Encode, UiWhiteLandsAtUiWhiteNits) {
   EXPECT_EQ(codes_at(f, 1, 0)[0], std::lround(transfer::pq_inverse_eotf(200) * 1023));
 }
 
+// ui.inverse_tonemap: linear is the old mapping (the same codes as the default); bt2446c puts
+// UI white (V = 1) on the display peak and keeps light below BT.2446-1's knee (58.535 %) linear.
+TEST(Encode, UiInverseTonemap) {
+  auto overlay = std::make_shared<OverlayImage>();
+  overlay->width = 2;
+  overlay->height = 1;
+  const float knee_v = static_cast<float>(transfer::srgb_inverse_eotf(0.5));  // light 0.5 < knee
+  overlay->rgba = {1, 1, 1, 1, knee_v, knee_v, knee_v, 1};
+  auto s = settings(Mode::hdr10);
+  s.ui.overlay = overlay;
+  s.target.ui_white_nits = 203;
+  const auto base = encode(solid(2, 1, {0, 0, 0}), s);
+  s.target.sdr_inverse_tonemap = InverseTonemap::linear;
+  const auto lin = encode(solid(2, 1, {0, 0, 0}), s);
+  for (int x = 0; x < 2; ++x) EXPECT_EQ(codes_at(lin, x, 0), codes_at(base, x, 0));
+  EXPECT_EQ(codes_at(lin, 0, 0)[0], 594);  // 203 cd/m2
+  s.target.sdr_inverse_tonemap = InverseTonemap::bt2446c;
+  const auto itm = encode(solid(2, 1, {0, 0, 0}), s);
+  EXPECT_EQ(codes_at(itm, 0, 0)[0], 769);  // the 1000 cd/m2 peak (REFERENCE.md §2)
+  EXPECT_EQ(codes_at(itm, 1, 0)[0], codes_at(base, 1, 0)[0]);
+}
+
 TEST(Encode, InvalidSettingsAreErrors) {
   const Image img = solid(1, 1, {1, 1, 1});
   auto s = settings(Mode::hdr10, "nope");
