@@ -448,6 +448,7 @@ nlohmann::json resolved_request(const FrameRequest& r, const EncodedFrame& f) {
   j["display"]["bits"] = t.bits;
   j["display"]["sdr_curve"] = to_string(t.sdr_curve);
   j["display"]["sdr_content_eotf"] = to_string(t.sdr_content_eotf);
+  j["display"]["sdr_inverse_tonemap"] = to_string(t.sdr_inverse_tonemap);
   if (const auto tc = f.settings.find("tone_curve"); tc != f.settings.end() && r.source != Source::pattern)
     j["tone"]["apply"] = tc->value("apply", "");
   if (const auto ex = f.settings.find("exposure"); ex != f.settings.end() && r.source != Source::pattern)

@@ -349,6 +349,7 @@ nlohmann::json sidecar_json(const EncodedFrame& frame, const std::map<std::strin
   j["ui_white_nits"] = t.ui_white_nits;
   j["sdr_white_nits"] = t.sdr_white_nits;
   j["sdr_content_eotf"] = to_string(t.sdr_content_eotf);
+  j["sdr_inverse_tonemap"] = to_string(t.sdr_inverse_tonemap);
   j["target_source"] = t.source;
   j["mastering_display"] = {{"primaries", primaries_json(frame.mastering.primaries)},
                             {"max_nits", frame.mastering.max_nits},
