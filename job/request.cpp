@@ -515,9 +515,9 @@ LevelSettings request_levels(const FrameRequest& r) {
   l.sdr_white_nits = r.optional_number("display.sdr_white_nits");
   // Range and SDR curve have static defaults, but only a given one overrides the display's.
   const std::string range = r.text("display.range"), sdr_curve = r.text("display.sdr_curve"),
-                    sdr_eotf = r.text("display.sdr_content_eotf");
+                    sdr_eotf = r.text("display.sdr_content_eotf"), inverse = r.text("ui.inverse_tonemap");
   if (r.has("display.sdr_content_eotf")) l.sdr_content_eotf = parse_sdr_eotf(sdr_eotf);
-  if (r.has("ui.inverse_tonemap")) l.sdr_inverse_tonemap = parse_inverse_tonemap(r.text("ui.inverse_tonemap"));
+  if (r.has("ui.inverse_tonemap")) l.sdr_inverse_tonemap = parse_inverse_tonemap(inverse);
   if (r.has("display.range")) l.range = parse_range(range);
   if (r.has("display.sdr_curve")) l.sdr_curve = parse_sdr_curve(sdr_curve);
   if (!r.is_null("display.bits")) l.bits = static_cast<int>(r.integer("display.bits"));
