@@ -293,7 +293,9 @@ Result<std::shared_ptr<const Grade>> load_lut_file(const GradeSettings& s, doubl
   if (is_cube(path))
     return std::shared_ptr<const Grade>(
         std::make_shared<CubeGrade>(s.placement, in, out, std::move(cube), interp, s.lut_path, baked_peak));
-  auto proc = ocio::file_transform(path, interp);
+  auto bytes = io::read_all(fd->get(), s.lut_path, io::kMaxInputFileBytes);
+  if (!bytes) return io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
+  auto proc = ocio::file_transform(*bytes, path, interp);
   if (!proc) return proc.error();
   return std::shared_ptr<const Grade>(std::make_shared<OcioFileGrade>(s.placement, in, out, *proc, interp, s.lut_path));
 }

@@ -11,10 +11,12 @@
 #include <cstdlib>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "encode/colour/color.hpp"
 #include "encode/tone/tonemap.hpp"
+#include "encode/io/private_copy.hpp"
 #include "encode/parallel.hpp"
 
 namespace OCIO = OCIO_NAMESPACE;
@@ -86,21 +88,46 @@ void Processor::apply_rgba(float* rgba, std::size_t pixels, int threads) const {
   });
 }
 
-Result<Processor> file_transform(const std::filesystem::path& path, lut::Interpolation interp) {
+namespace {
+
+// The name a copy of `name` gets in a private directory: its file name alone (OpenColorIO
+// chooses the reader by the extension).
+std::filesystem::path copy_name(const std::filesystem::path& name) {
+  auto file = name.filename();
+  return file.empty() || file == "." || file == ".." ? std::filesystem::path("lut") : file;
+}
+
+}  // namespace
+
+Result<Processor> file_transform(std::string_view bytes, const std::filesystem::path& name, lut::Interpolation interp) {
   quiet_logging();
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    return make_error("grade.file", fmt::format("{}: no such LUT file", path.string()), "lut");
+  auto copies = io::PrivateCopies::create();
+  if (!copies) return copies.error();
+  auto copy = copies->add(copy_name(name), bytes);
+  if (!copy) return copy.error();
   try {
     OCIO::ClearAllCaches();  // OCIO caches files by path; a rewritten file must be re-read
     auto config = OCIO::Config::CreateRaw();
     auto ft = OCIO::FileTransform::Create();
-    ft->setSrc(std::filesystem::absolute(path).string().c_str());
+    ft->setSrc(copy->c_str());
     ft->setInterpolation(interp == lut::Interpolation::tetrahedral ? OCIO::INTERP_TETRAHEDRAL : OCIO::INTERP_LINEAR);
-    return make_processor(config->getProcessor(ft));
+    return make_processor(config->getProcessor(ft));  // reads the copy now; the copy may go
   } catch (const std::exception& e) {
-    return make_error("grade.format", fmt::format("{}: OpenColorIO cannot read it: {}", path.string(), one_line(e.what())), "lut");
+    std::string why = one_line(e.what());
+    // OpenColorIO's message names the private copy: name the user's file instead.
+    for (std::size_t at; (at = why.find(copy->string())) != std::string::npos;) why.replace(at, copy->string().size(), name.string());
+    return make_error("grade.format", fmt::format("{}: OpenColorIO cannot read it: {}", name.string(), why), "lut");
   }
+}
+
+Result<Processor> file_transform(const std::filesystem::path& path, lut::Interpolation interp) {
+  auto bytes = io::InputFiles{}.read(path, io::kMaxInputFileBytes);
+  if (!bytes) {
+    Error e = io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
+    if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", path.string(), bytes.error().message);
+    return e;
+  }
+  return file_transform(*bytes, path, interp);
 }
 
 // ---- Configs ---------------------------------------------------------------------------
@@ -138,7 +165,10 @@ Result<OCIO::ConstConfigRcPtr> open_config(const std::string& explicit_path, std
     std::istringstream in(*text);
     auto config = OCIO::Config::CreateFromStream(in)->createEditableCopy();
     // As CreateFromFile: the config's relative search paths start at its own directory.
-    config->setWorkingDir(std::filesystem::absolute(used).parent_path().string().c_str());
+    const std::filesystem::path at = files.root && !explicit_path.empty() && std::filesystem::path(used).is_relative()
+                                         ? files.root->path() / used
+                                         : std::filesystem::absolute(used);
+    config->setWorkingDir(at.parent_path().string().c_str());
     return OCIO::ConstConfigRcPtr(config);
   } catch (const std::exception& e) {
     return make_error("grade.ocio", fmt::format("OpenColorIO config {}: {}", used, one_line(e.what())), "ocio_config");
@@ -173,7 +203,111 @@ struct ConfigContext {
   OCIO::ConfigRcPtr cfg;
   std::string path, working;
   nlohmann::json desc;
+  // The verified copies OpenColorIO reads instead of a request's files (a confined config's
+  // LUTs, a LUT in a named colour space); they must outlast getProcessor().
+  std::optional<io::PrivateCopies> copies;
 };
+
+// Every FileTransform in `t` (groups searched through).
+void file_transforms(const OCIO::ConstTransformRcPtr& t, std::vector<std::string>& out) {
+  if (!t) return;
+  if (auto g = OCIO::DynamicPtrCast<const OCIO::GroupTransform>(t)) {
+    for (int i = 0; i < g->getNumTransforms(); ++i) file_transforms(g->getTransform(i), out);
+  } else if (auto f = OCIO::DynamicPtrCast<const OCIO::FileTransform>(t)) {
+    if (f->getSrc()) out.emplace_back(f->getSrc());
+  }
+}
+
+// The sources of every FileTransform anywhere in the config: colour spaces, looks, view
+// transforms, named transforms, both directions.
+std::vector<std::string> config_file_sources(const OCIO::Config& c) {
+  std::vector<std::string> out;
+  for (int i = 0; i < c.getNumColorSpaces(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL); ++i) {
+    auto cs = c.getColorSpace(c.getColorSpaceNameByIndex(OCIO::SEARCH_REFERENCE_SPACE_ALL, OCIO::COLORSPACE_ALL, i));
+    if (!cs) continue;
+    file_transforms(cs->getTransform(OCIO::COLORSPACE_DIR_TO_REFERENCE), out);
+    file_transforms(cs->getTransform(OCIO::COLORSPACE_DIR_FROM_REFERENCE), out);
+  }
+  for (int i = 0; i < c.getNumLooks(); ++i)
+    if (auto look = c.getLook(c.getLookNameByIndex(i))) {
+      file_transforms(look->getTransform(), out);
+      file_transforms(look->getInverseTransform(), out);
+    }
+  for (int i = 0; i < c.getNumViewTransforms(); ++i)
+    if (auto vt = c.getViewTransform(c.getViewTransformNameByIndex(i))) {
+      file_transforms(vt->getTransform(OCIO::VIEWTRANSFORM_DIR_TO_REFERENCE), out);
+      file_transforms(vt->getTransform(OCIO::VIEWTRANSFORM_DIR_FROM_REFERENCE), out);
+    }
+  for (int i = 0; i < c.getNumNamedTransforms(OCIO::NAMEDTRANSFORM_ALL); ++i)
+    if (auto nt = c.getNamedTransform(c.getNamedTransformNameByIndex(OCIO::NAMEDTRANSFORM_ALL, i))) {
+      file_transforms(nt->getTransform(OCIO::TRANSFORM_DIR_FORWARD), out);
+      file_transforms(nt->getTransform(OCIO::TRANSFORM_DIR_INVERSE), out);
+    }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+// `p` (absolute, normalised) relative to `root`, or empty when it is not inside it.
+std::filesystem::path inside(const std::filesystem::path& p, const std::filesystem::path& root) {
+  auto rel = p.lexically_normal().lexically_relative(root);
+  if (rel.empty() || *rel.begin() == "..") return {};
+  return rel;
+}
+
+// A config read from the asset root names its LUTs by paths OpenColorIO would resolve and
+// open itself, when it builds a processor: a symbolic link, FIFO or hard link swapped in
+// would be followed. Instead each file it can name is resolved now, read through the file
+// model (the same refusals as any input) and copied into a private directory laid out as
+// the asset root is (under root/); the config's working directory and search paths then point there, so
+// OpenColorIO finds only the copies.
+Result<void> confine_config(ConfigContext& ctx, const io::InputFiles& files) {
+  const auto root = files.root->path();
+  const auto config_dir = std::filesystem::path(ctx.cfg->getWorkingDir());
+  auto copies = io::PrivateCopies::create();
+  if (!copies) return copies.error();
+  auto context = ctx.cfg->getCurrentContext();
+  for (const auto& src : config_file_sources(*ctx.cfg)) {
+    const std::string expanded = context->resolveStringVar(src.c_str());
+    if (std::filesystem::path(expanded).is_absolute())
+      return make_error("path.forbidden", fmt::format("OpenColorIO config {}: LUT '{}' is an absolute path; a config in {} names "
+                                                      "its files relative to its search path", ctx.path, one_line(src),
+                                                      files.root->options().what), "ocio_config");
+    std::string resolved;
+    try {
+      resolved = context->resolveFileLocation(src.c_str());
+    } catch (const std::exception&) {
+      continue;  // not there: OpenColorIO says so if the transform is used
+    }
+    const auto rel = inside(std::filesystem::absolute(resolved), root);
+    if (rel.empty())
+      return make_error("path.forbidden", fmt::format("OpenColorIO config {}: LUT '{}' leads outside {}", ctx.path,
+                                                      one_line(src), files.root->options().what), "ocio_config");
+    auto bytes = files.read(rel, io::kMaxInputFileBytes);
+    if (!bytes) {
+      Error e = io::reader_error(bytes.error(), "grade.ocio", "grade.ocio", "ocio_config");
+      e.message = fmt::format("OpenColorIO config {}: LUT '{}': {}", ctx.path, one_line(src), e.message);
+      return e;
+    }
+    auto copy = copies->add("root" / rel, *bytes);
+    if (!copy) return copy.error();
+  }
+  // The same resolution, in the copy: every search path mapped to its place there (one that
+  // leads outside the root to a directory that holds nothing).
+  std::vector<std::string> search;
+  for (int i = 0; i < ctx.cfg->getNumSearchPaths(); ++i) {
+    std::filesystem::path sp = context->resolveStringVar(ctx.cfg->getSearchPath(i));
+    if (!sp.is_absolute()) sp = config_dir / sp;
+    const auto rel = inside(sp, root);
+    search.push_back((rel.empty() ? copies->map("outside") : copies->map("root" / rel)).lexically_normal().string());
+  }
+  const auto config_rel = inside(config_dir, root);
+  ctx.cfg->setWorkingDir(copies->map("root" / config_rel).lexically_normal().c_str());
+  ctx.cfg->clearSearchPaths();
+  for (const auto& sp : search) ctx.cfg->addSearchPath(sp.c_str());
+  ctx.copies.emplace(std::move(*copies));
+  return {};
+}
 
 Result<std::string> check_colour_space(const OCIO::Config& cfg, const std::string& name) {
   if (cfg.getColorSpace(name.c_str())) return name;
@@ -186,6 +320,10 @@ Result<ConfigContext> config_context(const grade::GradeSettings& s, std::vector<
   auto base = open_config(s.ocio_config, ctx.path, s.files);
   if (!base) return base.error();
   ctx.cfg = (*base)->createEditableCopy();
+  if (!s.ocio_config.empty() && s.files.root) {  // a config the request named, in the asset root
+    auto ok = confine_config(ctx, s.files);
+    if (!ok) return ok.error();
+  }
   const bool names_working = !s.ocio_colorspace.empty() && s.lut_path.empty() &&
                              (!s.ocio_look.empty() || !s.ocio_display.empty());
   if (names_working) {
@@ -269,16 +407,25 @@ Result<ConfigGrade> build_config_grade(ConfigContext& ctx, const grade::GradeSet
   if (!s.lut_path.empty()) {  // a LUT in a named colour space
     auto cs = check_colour_space(*ctx.cfg, s.ocio_colorspace);
     if (!cs) return cs.error();
-    if (auto fd = s.files.open(s.lut_path); !fd) {  // OpenColorIO opens it itself, right after
-      Error e = io::reader_error(fd.error(), "grade.file", "grade.file", "lut");
-      if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", s.lut_path, fd.error().message);
+    // Read through the file model now; OpenColorIO reads a private copy of these bytes.
+    auto bytes = s.files.read(s.lut_path, io::kMaxInputFileBytes);
+    if (!bytes) {
+      Error e = io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
+      if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", s.lut_path, bytes.error().message);
       return e;
     }
+    if (!ctx.copies) {
+      auto copies = io::PrivateCopies::create();
+      if (!copies) return copies.error();
+      ctx.copies.emplace(std::move(*copies));
+    }
+    auto copy = ctx.copies->add(std::filesystem::path("lut") / copy_name(s.lut_path), *bytes);
+    if (!copy) return copy.error();
     auto to = OCIO::ColorSpaceTransform::Create();
     to->setSrc(ctx.working.c_str());
     to->setDst(cs->c_str());
     auto ft = OCIO::FileTransform::Create();
-    ft->setSrc(std::filesystem::absolute(s.lut_path).string().c_str());
+    ft->setSrc(copy->c_str());
     ft->setInterpolation(s.trilinear ? OCIO::INTERP_LINEAR : OCIO::INTERP_TETRAHEDRAL);
     auto from = OCIO::ColorSpaceTransform::Create();
     from->setSrc(cs->c_str());

@@ -39,6 +39,11 @@ class Processor {
 
 // Any file OCIO reads (.cube, .clf/.ctf, .spi3d, .spi1d, .3dl, .csp, .cub, ...) through a
 // FileTransform on a raw config. Errors are one line naming the file.
+// The bytes of a file already opened through the file model (encode/io/beneath.hpp), whose
+// name's extension tells OpenColorIO the format: OpenColorIO reads a private copy of them
+// (encode/io/private_copy.hpp), never the path a request named.
+Result<Processor> file_transform(std::string_view bytes, const std::filesystem::path& name, lut::Interpolation interp);
+// A file of the CLI's user, opened as given (io::open_regular) and read as above.
 Result<Processor> file_transform(const std::filesystem::path& path, lut::Interpolation interp);
 
 // A grade built from an OpenColorIO config (GradeSettings::ocio_*):

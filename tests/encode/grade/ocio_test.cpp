@@ -11,12 +11,15 @@
 #include <fstream>
 #include <random>
 
+#include <sys/stat.h>
+
 #include <OpenColorIO/OpenColorIO.h>
 
 #include "encode/colour/color.hpp"
 #include "encode/grade/grade.hpp"
 #include "encode/grade/lut.hpp"
 #include "encode/grade/ocio.hpp"
+#include "encode/io/beneath.hpp"
 #include "encode/tone/tonemap.hpp"
 #include "tests/testing/testing.hpp"
 
@@ -319,6 +322,150 @@ TEST(AcesCurves, ClipsToADimmerDisplay) {
   auto c = tonemap::prepare("aces-ocio-hdr-4000", {600, 0, 203});
   ASSERT_TRUE(c.ok());
   EXPECT_LE((*c)->map(1000.0), 600.0 / 203 + 1e-12);
+}
+
+// ---- A config in the asset root: OpenColorIO reads only verified copies -------------------
+// A config the request names (beneath the daemon's asset root) names LUTs OpenColorIO used to
+// open itself, following whatever the path led to. Now each is read through the file model
+// first, so a link, a hard link or a FIFO among them is refused with the file model's code,
+// and a LUT reached through a search path leading outside the root is refused (each of these
+// was used, or blocked, before issue 28's confinement).
+constexpr const char* kLookConfig = R"yaml(ocio_profile_version: 2.1
+search_path: {SEARCH}
+roles:
+  aces_interchange: ACES2065-1
+  scene_linear: ACEScg
+  default: ACES2065-1
+file_rules:
+  - !<Rule> {name: Default, colorspace: default}
+displays:
+  sRGB:
+    - !<View> {name: Raw, colorspace: ACES2065-1}
+active_displays: []
+active_views: []
+looks:
+  - !<Look>
+    name: halve
+    process_space: ACEScg
+    transform: !<FileTransform> {src: {SRC}, interpolation: linear}
+colorspaces:
+  - !<ColorSpace>
+    name: ACES2065-1
+    encoding: scene-linear
+  - !<ColorSpace>
+    name: ACEScg
+    encoding: scene-linear
+    to_scene_reference: !<BuiltinTransform> {style: "ACEScg_to_ACES2065-1"}
+)yaml";
+
+// A 2-point cube that halves every channel (written by hand, R fastest).
+std::string halving_cube() {
+  std::string t = "LUT_3D_SIZE 2\n";
+  for (int b = 0; b < 2; ++b)
+    for (int g = 0; g < 2; ++g)
+      for (int r = 0; r < 2; ++r) t += fmt::format("{} {} {}\n", 0.5 * r, 0.5 * g, 0.5 * b);
+  return t;
+}
+
+class ConfinedConfig : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = dir_ / "root";
+    std::filesystem::create_directories(root_ / "cfg" / "luts");
+    std::filesystem::create_directories(dir_ / "outside");
+    std::ofstream(dir_ / "outside" / "halve.cube") << halving_cube();
+  }
+  void write_config(const std::string& search, const std::string& src) {
+    std::string text = kLookConfig;
+    text.replace(text.find("{SEARCH}"), 8, search);
+    text.replace(text.find("{SRC}"), 5, src);
+    std::ofstream(root_ / "cfg" / "look.ocio") << text;
+  }
+  Result<std::shared_ptr<const grade::Grade>> load() {
+    GradeSettings s;
+    s.ocio_config = (root_ / "cfg" / "look.ocio").string();
+    s.ocio_look = "halve";
+    s.files.root = io::Root::open(root_).value();
+    return grade::load_grade(s, 1000, nullptr);
+  }
+  hdrd::testing::TempDir dir_;
+  std::filesystem::path root_;
+};
+
+TEST_F(ConfinedConfig, ReadsItsLutsThroughTheFileModel) {
+  std::ofstream(root_ / "cfg" / "luts" / "halve.cube") << halving_cube();
+  write_config("luts", "halve.cube");
+  // The private copies are made beneath $TMPDIR, and gone once the grade is built.
+  const auto tmp = dir_ / "tmp";
+  std::filesystem::create_directories(tmp);
+  const char* old_tmp = std::getenv("TMPDIR");
+  const std::string saved = old_tmp ? old_tmp : "";
+  ::setenv("TMPDIR", tmp.c_str(), 1);
+  auto g = load();
+  if (old_tmp) ::setenv("TMPDIR", saved.c_str(), 1); else ::unsetenv("TMPDIR");
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_TRUE(std::filesystem::is_empty(tmp));
+  // The look halves in ACEScg, a linear space: it halves in Rec.2020 too.
+  for (const auto& c : colours(50, 0.9, 11)) {
+    const color::Vec3 got = apply(**g, c);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[i], 0.5 * c[i], 2e-3) << i;
+  }
+  EXPECT_EQ((*g)->describe()["config"], (root_ / "cfg" / "look.ocio").string());
+}
+
+TEST_F(ConfinedConfig, RefusesALinkedLut) {
+  std::filesystem::create_symlink(dir_ / "outside" / "halve.cube", root_ / "cfg" / "luts" / "halve.cube");
+  write_config("luts", "halve.cube");
+  auto g = load();
+  ASSERT_FALSE(g.ok());
+  EXPECT_EQ(g.error().code, "path.symlink") << g.error().message;
+}
+
+TEST_F(ConfinedConfig, RefusesAHardLinkedLut) {
+  std::filesystem::create_hard_link(dir_ / "outside" / "halve.cube", root_ / "cfg" / "luts" / "halve.cube");
+  write_config("luts", "halve.cube");
+  auto g = load();
+  ASSERT_FALSE(g.ok());
+  EXPECT_EQ(g.error().code, "path.hard_link") << g.error().message;
+}
+
+TEST_F(ConfinedConfig, RefusesAFifoWithoutWaiting) {
+  ASSERT_EQ(::mkfifo((root_ / "cfg" / "luts" / "halve.cube").c_str(), 0600), 0);
+  write_config("luts", "halve.cube");
+  auto g = load();  // before, OpenColorIO's own open blocked here for good
+  ASSERT_FALSE(g.ok());
+  EXPECT_EQ(g.error().code, "path.not_regular") << g.error().message;
+}
+
+TEST_F(ConfinedConfig, RefusesLutsOutsideTheRoot) {
+  write_config("../../outside", "halve.cube");  // a search path out of the root
+  auto g = load();
+  ASSERT_FALSE(g.ok());
+  EXPECT_EQ(g.error().code, "path.forbidden") << g.error().message;
+  write_config("luts", (dir_ / "outside" / "halve.cube").string());  // an absolute source
+  g = load();
+  ASSERT_FALSE(g.ok());
+  EXPECT_EQ(g.error().code, "path.forbidden") << g.error().message;
+}
+
+// A LUT OpenColorIO reads (not a .cube, which hdrd parses itself) given directly, beneath a
+// root: the bytes come from the descriptor opened through the file model.
+TEST_F(ConfinedConfig, AnOcioLutBeneathARootIsReadFromItsDescriptor) {
+  // A .spi1d that halves (OpenColorIO's Sony 1D format).
+  std::ofstream(root_ / "halve.spi1d") << "Version 1\nFrom 0.0 1.0\nLength 2\nComponents 1\n{\n0.0\n0.5\n}\n";
+  std::filesystem::create_symlink(root_ / "halve.spi1d", root_ / "link.spi1d");
+  GradeSettings s;
+  s.files.root = io::Root::open(root_).value();
+  s.lut_path = "link.spi1d";
+  auto refused = grade::load_grade(s, 1000, nullptr);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, "path.symlink");
+  s.lut_path = "halve.spi1d";
+  s.placement = Placement::scene;
+  auto g = grade::load_grade(s, 1000, nullptr);
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ((*g)->describe()["file"], "halve.spi1d");
+  EXPECT_EQ((*g)->describe()["source"], "ocio-file");
 }
 
 }  // namespace
