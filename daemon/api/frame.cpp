@@ -57,13 +57,13 @@ struct FrameJobState {
 
 std::string_view prefix_of(job::Source s) { return job::to_string(s); }
 
-Result<std::uint64_t> memory_estimate(const job::FrameJob& job, std::optional<job::Output> reply,
+Result<std::uint64_t> memory_estimate(const job::FrameJob& job, const io::InputFiles& files, std::optional<job::Output> reply,
                                       std::size_t body_bytes, std::string_view exr, const job::Limits& limits) {
   const job::FrameRequest& r = job.request();
   switch (r.source) {
-    case job::Source::render: return estimate_render_memory(r, reply, body_bytes, limits);
+    case job::Source::render: return estimate_render_memory(r, files, reply, body_bytes, limits);
     case job::Source::encode:
-      return estimate_encode_memory(r, reply, {reinterpret_cast<const std::uint8_t*>(exr.data()), exr.size()}, limits);
+      return estimate_encode_memory(r, files, reply, {reinterpret_cast<const std::uint8_t*>(exr.data()), exr.size()}, limits);
     case job::Source::pattern: return estimate_pattern_memory(r, reply, body_bytes);
   }
   return make_error("internal", "unknown request source");
@@ -121,7 +121,7 @@ void Service::post_frame(job::Source source, HttpRequest& http, std::shared_ptr<
   JobSpec spec;
   spec.deadline = request_deadline(http, timeout_s, *cfg);
   // What the job will allocate at its peak, checked against the budget at admission (memory.hpp).
-  auto memory = memory_estimate(*st->job, st->reply, http.body.size(), st->job->input().bytes, cfg->limits);
+  auto memory = memory_estimate(*st->job, jo.files, st->reply, http.body.size(), st->job->input().bytes, cfg->limits);
   if (!memory) return responder->reply(Reply::error(memory.error()));
   spec.memory_bytes = *memory;
   if (!dump)

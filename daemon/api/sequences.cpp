@@ -117,7 +117,7 @@ void Service::post_sequences(HttpRequest& http, std::shared_ptr<Responder> respo
     if (auto ok = check_files_in_root(cfg->paths.asset_root, plan->inputs, "images"); !ok)
       return responder->reply(Reply::error(ok.error()));
   constexpr std::size_t kQueueDepth = 2;  // job::SequenceOptions::queue_depth
-  auto memory = estimate_sequence_memory(*request, plan->inputs.empty() ? std::filesystem::path() : plan->inputs.front(),
+  auto memory = estimate_sequence_memory(*request, jo.files, plan->inputs.empty() ? std::filesystem::path() : plan->inputs.front(),
                                          kQueueDepth, http.body.size(), cfg->limits, plan->frames);
   if (!memory) return responder->reply(Reply::error(memory.error()));
 

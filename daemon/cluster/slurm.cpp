@@ -345,11 +345,14 @@ Result<PlanHeader> parse_plan_header(std::string_view text, const fs::path& plan
   return h;
 }
 
-Result<PlanHeader> read_plan_header(const fs::path& plan_path) {
-  std::ifstream f(plan_path, std::ios::binary);
-  if (!f) return make_error("plan.missing", "plan " + plan_path.string() + ": no such file", "plan");
-  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  auto h = parse_plan_header(text, fs::absolute(plan_path).parent_path());
+Result<PlanHeader> read_plan_header(const fs::path& plan_path, const io::InputFiles& files) {
+  auto text = files.read(plan_path, io::kMaxInputFileBytes);
+  if (!text) {
+    Error e = io::reader_error(text.error(), "plan.missing", "plan.missing", "plan");
+    e.message = "plan " + plan_path.string() + ": " + (e.code == "plan.missing" ? "no such file" : e.message);
+    return e;
+  }
+  auto h = parse_plan_header(*text, fs::absolute(plan_path).parent_path());
   if (!h) return make_error(h.error().code, "plan " + plan_path.string() + ": " + h.error().message, h.error().field);
   return h;
 }
@@ -395,8 +398,9 @@ Result<Client::Output> Client::run(const std::string& program, std::vector<std::
   return Output{r->signal ? -1 : r->exit_code, std::move(r->out), std::move(r->err)};
 }
 
-Result<Submission> Client::submit(const fs::path& plan_arg, const fs::path& outbase_arg, const SubmitOptions& options) const {
-  auto plan = read_plan_header(plan_arg);
+Result<Submission> Client::submit(const fs::path& plan_arg, const fs::path& outbase_arg, const SubmitOptions& options,
+                                  const io::InputFiles& files) const {
+  auto plan = read_plan_header(plan_arg, files);
   if (!plan) return plan.error();
   auto shards = chosen_shards(*plan, options);
   if (!shards) return shards.error();

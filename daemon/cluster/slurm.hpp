@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "encode/io/beneath.hpp"
 #include "encode/result.hpp"
 
 namespace hdrd::daemon::slurm {
@@ -63,7 +64,9 @@ struct PlanHeader {
 };
 inline constexpr std::uint32_t kMaxShards = 1000000;
 Result<PlanHeader> parse_plan_header(std::string_view json, const std::filesystem::path& plan_folder);
-Result<PlanHeader> read_plan_header(const std::filesystem::path& plan_path);
+// The plan file opened through `files` (encode/io/beneath.hpp): beneath the asset root for
+// the daemon (no links, no FIFO, no hard link), as given for the CLI.
+Result<PlanHeader> read_plan_header(const std::filesystem::path& plan_path, const io::InputFiles& files = {});
 
 // --- The client ---------------------------------------------------------------------------
 
@@ -138,7 +141,8 @@ class Client {
   // cancels the array). Errors: plan.*, slurm.options, slurm.sbatch (with sbatch's message),
   // slurm.sbatch_output, process.*.
   Result<Submission> submit(const std::filesystem::path& plan_path, const std::filesystem::path& outbase,
-                            const SubmitOptions& options = {}) const;
+                            const SubmitOptions& options = {},
+                            const io::InputFiles& files = {}) const;
   // squeue for the jobs it still knows, sacct for those it has forgotten.
   Result<Progress> progress(const Submission& submission) const;
   // scancel of the merge and the array (their pending and running parts).

@@ -22,7 +22,6 @@ constexpr std::uint64_t kSceneFileFactor = 4;     // a scene or glTF file: parse
 constexpr std::uint64_t kVideoEncoderFixedBytes = 192u << 20;  // estimate_sequence_memory (memory.hpp: measured)
 constexpr std::uint64_t kVideoEncoderBpp = 160;
 constexpr std::uint64_t kSequenceFrameBytes = 2u << 10;  // per frame: its sidecar entry and light summary (memory.hpp)
-constexpr std::size_t kExrHeaderPrefixBytes = 4u << 20;  // where an EXR's header must end for the estimate
 constexpr int kMaxMsaaSamples = shading::kMaxSamples;  // what the renderer clamps a request to
 
 bool float_output(std::optional<job::Output> reply) {
@@ -48,7 +47,7 @@ std::uint64_t frame_pixels(const job::FrameRequest& r) {
 
 // The UI overlay's decoded size, from the PNG's IHDR (uploaded, or the first bytes of the
 // file in the asset root), checked against the frame limits before anything is decoded.
-Result<std::uint64_t> ui_bytes(const job::FrameRequest& r, const Limits& limits) {
+Result<std::uint64_t> ui_bytes(const job::FrameRequest& r, const io::InputFiles& files, const Limits& limits) {
   const bool upload = !r.ui_png.empty();
   if (!upload && !has_value(r, "ui.path")) return std::uint64_t{0};
   std::vector<std::uint8_t> head;
@@ -57,10 +56,10 @@ Result<std::uint64_t> ui_bytes(const job::FrameRequest& r, const Limits& limits)
   if (upload) {
     head.assign(r.ui_png.begin(), r.ui_png.begin() + std::ptrdiff_t(std::min<std::size_t>(r.ui_png.size(), 64)));
   } else {
-    // Its header only, before the 202; never waiting on a FIFO (the job reads the file
-    // itself beneath the asset root, encode/io/beneath.hpp).
+    // Its header only, before the 202, opened as the job opens it (beneath the asset root,
+    // no links, never waiting on a FIFO); the job reads it again when it runs.
     const std::filesystem::path path = r.text("ui.path");
-    if (auto fd = io::open_regular(path); fd) {
+    if (auto fd = files.open(path); fd) {
       if (auto bytes = io::read_prefix(fd->get(), path.string(), 64); bytes) head.assign(bytes->begin(), bytes->end());
       if (auto id = io::identity_of(fd->get(), path.string()); id) file_bytes = std::uint64_t(id->size);
     }
@@ -88,28 +87,29 @@ std::string format_bytes(std::uint64_t b) {
 
 io::PngLimits ui_png_limits(const Limits& limits) { return {limits.max_width, limits.max_height, limits.max_pixels}; }
 
-Result<std::uint64_t> estimate_render_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
-                                             std::size_t body_bytes, const Limits& limits) {
-  auto ui = ui_bytes(r, limits);
+Result<std::uint64_t> estimate_render_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                             std::optional<job::Output> reply, std::size_t body_bytes,
+                                             const Limits& limits) {
+  auto ui = ui_bytes(r, files, limits);
   if (!ui) return ui.error();
   const std::uint64_t pixels = frame_pixels(r);
   const int samples = int(std::clamp<std::int64_t>(r.integer("samples"), 1, kMaxMsaaSamples));
   const std::uint64_t msaa = samples > 1 ? pixels * kMsaaSampleBpp * std::uint64_t(samples) : 0;
   std::uint64_t scene_file = 0;
   if (r.scene.kind == job::SceneRef::Kind::file) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(r.scene.path, ec);
-    if (!ec) scene_file = kSceneFileFactor * size;
+    if (auto fd = files.open(r.scene.path); fd)
+      if (auto id = io::identity_of(fd->get(), r.scene.path.string()); id) scene_file = kSceneFileFactor * std::uint64_t(id->size);
   }
   return kPerJobBytes + kRequestTextFactor * body_bytes + scene_file + *ui + pixels * (kTargetBpp + kFloatBpp) + msaa +
          encode_bytes(reply, pixels);
 }
 
-Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
-                                             std::span<const std::uint8_t> exr, const Limits& limits) {
+Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                             std::optional<job::Output> reply, std::span<const std::uint8_t> exr,
+                                             const Limits& limits) {
   auto pixels = io::exr_declared_pixels(exr);
   if (!pixels) return pixels.error();
-  auto ui = ui_bytes(r, limits);
+  auto ui = ui_bytes(r, files, limits);
   if (!ui) return ui.error();
   const std::uint64_t px = std::uint64_t(std::max<std::int64_t>(*pixels, 1));
   return kPerJobBytes + exr.size() + *ui + px * kFloatBpp + encode_bytes(reply, px);
@@ -121,25 +121,30 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
   return kPerJobBytes + kRequestTextFactor * body_bytes + pixels * kFloatBpp + encode_bytes(reply, pixels);
 }
 
-Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
+Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                               const std::filesystem::path& first_exr,
                                                std::size_t queue_depth, std::size_t body_bytes, const Limits& limits,
                                                int frames) {
   std::uint64_t frame = 0, pixels = 0;
   if (r.source == job::Source::encode) {
-    // The header only, before the 202; never waiting on a FIFO.
-    auto fd = io::open_regular(first_exr);
+    // The header only, before the 202, opened as the job opens its frames.
+    auto fd = files.open(first_exr);
     auto id = fd ? io::identity_of(fd->get(), first_exr.string()) : Result<io::FileIdentity>(fd.error());
-    auto prefix = id ? io::read_prefix(fd->get(), first_exr.string(), kExrHeaderPrefixBytes) : Result<std::string>(id.error());
-    if (!prefix) return make_error("file.unreadable", fmt::format("images: cannot read {}", first_exr.filename().string()), "images");
+    auto prefix = id ? io::read_prefix(fd->get(), first_exr.string(), io::kExrHeaderPrefixBytes) : Result<std::string>(id.error());
+    if (!prefix) {  // the file model's refusals (a link, a FIFO, a hard link) keep their codes
+      Error e = io::reader_error(prefix.error(), "file.unreadable", "file.unreadable", "images");
+      if (e.code == "file.unreadable") e.message = fmt::format("images: cannot read {}", first_exr.filename().string());
+      return e;
+    }
     const std::uint64_t size = std::uint64_t(id->size);
     const std::vector<std::uint8_t> head(prefix->begin(), prefix->end());
-    auto e = estimate_encode_memory(r, std::nullopt, head, limits);
+    auto e = estimate_encode_memory(r, files, std::nullopt, head, limits);
     if (!e) return e.error();
     auto px = io::exr_declared_pixels(head);
     pixels = px ? std::uint64_t(std::max<std::int64_t>(*px, 1)) : 1;
     frame = *e - head.size() + size;  // the whole file is read for each frame
   } else {
-    auto e = estimate_render_memory(r, std::nullopt, body_bytes, limits);
+    auto e = estimate_render_memory(r, files, std::nullopt, body_bytes, limits);
     if (!e) return e.error();
     frame = *e;
     pixels = frame_pixels(r);

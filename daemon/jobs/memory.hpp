@@ -23,6 +23,7 @@
 #include <span>
 #include <string>
 
+#include "encode/io/beneath.hpp"
 #include "encode/io/io.hpp"
 #include "encode/result.hpp"
 #include "job/outputs.hpp"
@@ -36,15 +37,20 @@ using job::Limits;
 std::string format_bytes(std::uint64_t bytes);
 
 // `reply`: the negotiated body format; unset: a dump (every output written to files).
+// `files`: where the job reads its inputs (job::JobOptions::files): the headers the estimate
+// reads (the UI PNG's, the first EXR's, a scene file's size) are opened through it, the same
+// way the job opens them (encode/io/beneath.hpp), so no estimate reads what the job may not.
 
 // A render (POST /v1/render): its frame, samples, output, scene file and UI. Errors:
 // request.limit when the UI PNG declares more pixels than the frame limits allow.
-Result<std::uint64_t> estimate_render_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
+Result<std::uint64_t> estimate_render_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                             std::optional<job::Output> reply,
                                              std::size_t body_bytes, const Limits& limits);
 
 // An upload (POST /v1/encode): the upload's bytes and the EXR's declared size from its
 // header. Errors: the EXR's own (exr.not_exr, exr.size, exr.truncated), request.limit for the UI.
-Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, std::optional<job::Output> reply,
+Result<std::uint64_t> estimate_encode_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                             std::optional<job::Output> reply,
                                              std::span<const std::uint8_t> exr, const Limits& limits);
 
 // A test pattern (POST /v1/pattern): a display-light frame of the request's size.
@@ -62,7 +68,8 @@ std::uint64_t estimate_pattern_memory(const job::FrameRequest& r, std::optional<
 // kept until the end; issue 28.10 measured ~1 MB per 1000 frames), 0 when the count is not
 // known before the first frame (a render whose animation decides).
 // Errors: the EXR's own, request.limit for the UI.
-Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const std::filesystem::path& first_exr,
+Result<std::uint64_t> estimate_sequence_memory(const job::FrameRequest& r, const io::InputFiles& files,
+                                               const std::filesystem::path& first_exr,
                                                std::size_t queue_depth, std::size_t body_bytes, const Limits& limits,
                                                int frames = 0);
 

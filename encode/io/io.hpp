@@ -77,6 +77,13 @@ Result<ExrImage> read_exr_memory(std::span<const std::uint8_t> bytes, const ExrR
 // The pixels the largest part of an EXR declares (its data window), from the header alone:
 // what decoding it would allocate, known before anything is decoded.
 Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes);
+// The largest part's data window size, from the header alone (the same part as above).
+struct ExrSize {
+  int width = 0, height = 0;
+};
+Result<ExrSize> exr_declared_size(std::span<const std::uint8_t> bytes, const std::string& name);
+// How much of a file's start holds any EXR header the checks above read before a job runs.
+inline constexpr std::size_t kExrHeaderPrefixBytes = std::size_t{4} << 20;
 
 struct ExrWriteOptions {
   bool half = true;  // half or float32 channels

@@ -68,8 +68,8 @@ TEST(JobMemory, TheEstimateCountsEveryFramesMetadata) {
   auto r = sequence_request(job::Source::render, {{"scene", "furnace"}, {"frames", 1000}, {"width", 64}, {"height", 32}});
   ASSERT_TRUE(r.ok()) << r.error().message;
   const job::Limits limits;
-  auto shorter = estimate_sequence_memory(*r, {}, 2, 100, limits, 1000);
-  auto longer = estimate_sequence_memory(*r, {}, 2, 100, limits, 101000);
+  auto shorter = estimate_sequence_memory(*r, {}, {}, 2, 100, limits, 1000);
+  auto longer = estimate_sequence_memory(*r, {}, {}, 2, 100, limits, 101000);
   ASSERT_TRUE(shorter.ok() && longer.ok());
   EXPECT_GE(*longer - *shorter, 100000u * 1000u) << "at least the measured 1 KB per frame";
 }
