@@ -781,9 +781,23 @@ Result<SequenceCheck> check_sequence(const FrameRequest& request, const JobOptio
     video::StreamInfo stream;
     stream.target = out.target;
     stream.mastering = out.target.mastering();
-    // An encode's size is its EXRs' (known at its first frame): an even stand-in here.
-    stream.width = request.source == Source::render ? static_cast<int>(request.integer("width")) : 64;
-    stream.height = request.source == Source::render ? static_cast<int>(request.integer("height")) : 64;
+    if (request.source == Source::render) {
+      stream.width = static_cast<int>(request.integer("width"));
+      stream.height = static_cast<int>(request.integer("height"));
+    } else {
+      // An encode's size is its EXRs': the first one's header, opened as its frame will be
+      // (a frame whose header cannot be read here fails as that frame, with its own error).
+      stream.width = stream.height = 64;  // an even stand-in
+      const auto& path = src->inputs.front();
+      if (auto fd = options.files.open(path); fd)
+        if (auto head = io::read_prefix(fd->get(), path.string(), io::kExrHeaderPrefixBytes); head)
+          if (auto size = io::exr_declared_size({reinterpret_cast<const std::uint8_t*>(head->data()), head->size()},
+                                                path.filename().string());
+              size) {
+            stream.width = size->width;
+            stream.height = size->height;
+          }
+    }
     if (auto ok = video::check_stream(**video, stream); !ok) return ok.error();
   }
   return out;

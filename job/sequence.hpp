@@ -99,8 +99,8 @@ Result<SequenceResult> run_sequence(const FrameRequest& request, const std::file
 // What run_sequence refuses before its first frame, checked without rendering or encoding
 // one: the EXR files and the frame count, the temporal and video settings, the video
 // against the first frame's display target (H.264 is SDR only, scRGB has no video form) and
-// a render's frame size (4:2:0 needs an even size; an encode's size is its EXRs', checked
-// at the first frame). The daemon answers 4xx from it before 202.
+// the frame size (4:2:0 needs an even size; an encode's size is its first EXR's, from the
+// header). The daemon answers 4xx from it before 202.
 struct SequenceCheck {
   int frames = 0;                             // 0: a render's animation decides (known at its frame 0)
   std::vector<std::filesystem::path> inputs;  // an encode's EXR files, `frames` of them

@@ -571,7 +571,8 @@ std::string scan_attributes(ByteReader& r, std::size_t max_name, PartShape& part
 }
 
 // Returns the pixel count of the largest part (what a read may decode).
-Result<std::int64_t> prescan_header(std::span<const std::uint8_t> bytes, const std::string& name) {
+Result<std::int64_t> prescan_header(std::span<const std::uint8_t> bytes, const std::string& name,
+                                    ExrSize* largest_size = nullptr) {
   if (bytes.size() < 8) return exr_error(name, "exr.truncated", "truncated file (no version field)");
   ByteReader r(bytes);
   const std::int32_t version = r.i32_at(4);
@@ -593,6 +594,7 @@ Result<std::int64_t> prescan_header(std::span<const std::uint8_t> bytes, const s
     const std::int64_t w = std::int64_t{d[2]} - d[0] + 1, h = std::int64_t{d[3]} - d[1] + 1;
     if (auto size = check_image_size(w, h); !size) return exr_error(name, "exr.size", size.error().message);
     chunks += std::max<std::int64_t>(min_chunks(p, w, h), 0);
+    if (w * h > largest && largest_size) *largest_size = {static_cast<int>(w), static_cast<int>(h)};
     largest = std::max(largest, w * h);
   }
   if (chunks > static_cast<std::int64_t>(r.left() / 8))
@@ -661,6 +663,16 @@ Result<std::int64_t> exr_declared_pixels(std::span<const std::uint8_t> bytes) {
   if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
     return exr_error("<memory>", "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
   return prescan_header(bytes, "<memory>");
+}
+
+Result<ExrSize> exr_declared_size(std::span<const std::uint8_t> bytes, const std::string& name) {
+  if (bytes.size() < 4 || std::memcmp(bytes.data(), kExrMagic.data(), 4) != 0)
+    return exr_error(name, "exr.not_exr", "not an OpenEXR file (no EXR magic number)");
+  ExrSize size;
+  auto ok = prescan_header(bytes, name, &size);
+  if (!ok) return ok.error();
+  if (size.width <= 0) return exr_error(name, "exr.corrupt", "no data window");
+  return size;
 }
 
 // ---- writing ---------------------------------------------------------------------------

@@ -424,7 +424,7 @@ namespace {
 // What a service checks before it accepts a sequence (202): no frame is made.
 TEST(SequenceCheck, RefusesBeforeTheFirstFrame) {
   testing::TempDir d;
-  for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0);
+  for (int i = 0; i < 3; ++i) write_shot(d / fmt::format("s.{}.exr", i), 1.0, 64, 16);  // x265's smallest
   const std::string images = (d / "s.%d.exr").string();
   auto check = [&](json body) {
     body["images"] = images;
@@ -448,6 +448,29 @@ TEST(SequenceCheck, RefusesBeforeTheFirstFrame) {
   auto odd = check_sequence(*r);
   ASSERT_FALSE(odd.ok());
   EXPECT_EQ(odd.error().code, "video.size") << odd.error().message;
+}
+
+// An encode's frame size is its EXRs': the first one's header is read before the first
+// frame, so a 4:2:0 video of odd-sized EXRs, or HEVC frames under x265's 16 rows, is refused
+// up front (before, check_sequence assumed 64x64 and frame 0 failed after the 202).
+TEST(SequenceCheck, AnEncodesSizeIsItsFirstExrs) {
+  testing::TempDir d;
+  auto check = [&](int w, int h, const char* codec) {
+    const std::string stem = fmt::format("s{}x{}", w, h);
+    for (int i = 0; i < 2; ++i) write_shot(d / fmt::format("{}.{}.exr", stem, i), 1.0, w, h);
+    auto r = parse_request_json(json{{"images", (d / (stem + ".%d.exr")).string()}, {"video", {{"codec", codec}}}},
+                                context(Source::encode, true));
+    EXPECT_TRUE(r.ok());
+    return check_sequence(*r);
+  };
+  auto odd = check(65, 32, "hevc");
+  ASSERT_FALSE(odd.ok());
+  EXPECT_EQ(odd.error().code, "video.size") << odd.error().message;
+  EXPECT_NE(odd.error().message.find("65x32"), std::string::npos) << odd.error().message;
+  auto flat = check(64, 8, "hevc");
+  ASSERT_FALSE(flat.ok());
+  EXPECT_EQ(flat.error().code, "video.size") << flat.error().message;
+  EXPECT_TRUE(check(64, 32, "hevc").ok());
 }
 
 }  // namespace
