@@ -75,7 +75,8 @@ class Service final : public HttpHandler {
   void get_cluster_submission(HttpRequest&, std::shared_ptr<Responder>);     // /v1/cluster/submissions/{id}
   void delete_cluster_submission(HttpRequest&, std::shared_ptr<Responder>);
   struct ClusterState;
-  static std::shared_ptr<ClusterState> new_cluster_state();  // api_cluster.cpp
+  static std::shared_ptr<ClusterState> new_cluster_state();  // api/cluster.cpp
+  std::pair<std::size_t, std::size_t> cluster_kept() const;  // submissions remembered, their bytes
   std::shared_ptr<ClusterState> cluster_;
   // GET /v1/capabilities' "patterns": names, descriptions, sources, parameters, modes.
   static nlohmann::json pattern_capabilities();

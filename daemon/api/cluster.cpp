@@ -22,6 +22,13 @@ namespace {
 using nlohmann::json;
 constexpr std::string_view kPrefix = "/v1/cluster/submissions/";
 constexpr std::size_t kMaxSubmissions = 1000;  // remembered, oldest forgotten
+// And at most this much memory held by them (a submission of scattered shards keeps one
+// range per run of them): the oldest are forgotten first. GET /v1/status reports the total.
+constexpr std::size_t kMaxSubmissionBytes = std::size_t{32} << 20;
+
+std::size_t kept_bytes(const std::pair<std::string, slurm::Submission>& s) {
+  return sizeof s + s.first.capacity() + s.second.shards.kept_bytes();
+}
 
 json submission_json(const std::string& id, const slurm::Submission& s) {
   return {{"id", id},
@@ -50,6 +57,16 @@ bool valid_name(const std::string& n) {
 struct Service::ClusterState {
   std::mutex mu;
   std::vector<std::pair<std::string, slurm::Submission>> submissions;  // oldest first
+  std::size_t bytes = 0;                                                 // kept_bytes() over them
+  void add(std::string id, slurm::Submission s) {
+    std::lock_guard lock(mu);
+    submissions.emplace_back(std::move(id), std::move(s));
+    bytes += kept_bytes(submissions.back());
+    std::size_t drop = 0;
+    while (submissions.size() - drop > 1 && (submissions.size() - drop > kMaxSubmissions || bytes > kMaxSubmissionBytes))
+      bytes -= kept_bytes(submissions[drop++]);
+    submissions.erase(submissions.begin(), submissions.begin() + std::ptrdiff_t(drop));
+  }
   std::optional<slurm::Submission> find(std::string_view id) {
     std::lock_guard lock(mu);
     for (const auto& [sid, s] : submissions)
@@ -59,6 +76,11 @@ struct Service::ClusterState {
 };
 
 std::shared_ptr<Service::ClusterState> Service::new_cluster_state() { return std::make_shared<ClusterState>(); }
+
+std::pair<std::size_t, std::size_t> Service::cluster_kept() const {
+  std::lock_guard lock(cluster_->mu);
+  return {cluster_->submissions.size(), cluster_->bytes};
+}
 
 namespace {
 
@@ -118,14 +140,10 @@ void Service::post_cluster_submission(HttpRequest& http, std::shared_ptr<Respond
       return responder->reply(Reply::error(make_error("request.value", "max_parallel: an integer >= 1", "max_parallel")));
     options.max_parallel = m.get<std::uint32_t>();
   }
-  auto submitted = client->submit(*plan, cfg->paths.dump_dir / name, options);
+  auto submitted = client->submit(*plan, cfg->paths.dump_dir / name, options, daemon_job_options(*cfg).files);
   if (!submitted) return responder->reply(Reply::error(submitted.error()));
   const std::string id = fmt::format("slurm-{}", submitted->array_job_id);
-  {
-    std::lock_guard lock(cluster_->mu);
-    cluster_->submissions.emplace_back(id, *submitted);
-    if (cluster_->submissions.size() > kMaxSubmissions) cluster_->submissions.erase(cluster_->submissions.begin());
-  }
+  cluster_->add(id, *submitted);
   Reply r = json_reply(submission_json(id, *submitted));
   r.status = 202;
   r.headers.emplace_back("Location", std::string(kPrefix) + id);

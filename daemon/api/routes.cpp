@@ -250,6 +250,10 @@ nlohmann::json Service::status_json() const {
                       {"max_running", cfg->sequences.max_running}, {"max_queued", cfg->sequences.max_queued},
                       {"memory_in_flight_bytes", s.memory_in_flight_bytes}, {"memory_kept_bytes", s.memory_kept_bytes}};
   }
+  if (cluster_) {
+    const auto [submissions, bytes] = cluster_kept();
+    j["cluster"] = {{"submissions_kept", submissions}, {"kept_bytes", bytes}};
+  }
   j["requests_in_flight"] = server_ ? server_->open_requests() : 0;
   return j;
 }
