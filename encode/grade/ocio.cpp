@@ -97,6 +97,16 @@ std::filesystem::path copy_name(const std::filesystem::path& name) {
   return file.empty() || file == "." || file == ".." ? std::filesystem::path("lut") : file;
 }
 
+// A LUT's bytes, read through the file model (its refusals keep their codes; a missing
+// file is grade.file naming the LUT).
+Result<std::string> read_lut(const io::InputFiles& files, const std::filesystem::path& path) {
+  auto bytes = files.read(path, io::kMaxInputFileBytes);
+  if (bytes) return bytes;
+  Error e = io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
+  if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", path.string(), bytes.error().message);
+  return e;
+}
+
 }  // namespace
 
 Result<Processor> file_transform(std::string_view bytes, const std::filesystem::path& name, lut::Interpolation interp) {
@@ -121,12 +131,8 @@ Result<Processor> file_transform(std::string_view bytes, const std::filesystem::
 }
 
 Result<Processor> file_transform(const std::filesystem::path& path, lut::Interpolation interp) {
-  auto bytes = io::InputFiles{}.read(path, io::kMaxInputFileBytes);
-  if (!bytes) {
-    Error e = io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
-    if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", path.string(), bytes.error().message);
-    return e;
-  }
+  auto bytes = read_lut(io::InputFiles{}, path);
+  if (!bytes) return bytes.error();
   return file_transform(*bytes, path, interp);
 }
 
@@ -408,12 +414,8 @@ Result<ConfigGrade> build_config_grade(ConfigContext& ctx, const grade::GradeSet
     auto cs = check_colour_space(*ctx.cfg, s.ocio_colorspace);
     if (!cs) return cs.error();
     // Read through the file model now; OpenColorIO reads a private copy of these bytes.
-    auto bytes = s.files.read(s.lut_path, io::kMaxInputFileBytes);
-    if (!bytes) {
-      Error e = io::reader_error(bytes.error(), "grade.file", "grade.file", "lut");
-      if (e.code == "grade.file") e.message = fmt::format("{}: no such LUT file ({})", s.lut_path, bytes.error().message);
-      return e;
-    }
+    auto bytes = read_lut(s.files, s.lut_path);
+    if (!bytes) return bytes.error();
     if (!ctx.copies) {
       auto copies = io::PrivateCopies::create();
       if (!copies) return copies.error();
